@@ -1,0 +1,26 @@
+/* SPDX-License-Identifier: MIT */
+/**
+ * @file sfd.h
+ * @brief Umbrella header of the sfd core C API.
+ *
+ * Threading: every object is caller-owned; functions are reentrant on distinct objects and not
+ * on the same one (one detector per thread). The core never allocates, never reads a clock and
+ * never prints.
+ */
+#ifndef SFD_H
+#define SFD_H
+
+#define SFD_VERSION_MAJOR 0
+#define SFD_VERSION_MINOR 1
+#define SFD_VERSION ((SFD_VERSION_MAJOR << 16) | SFD_VERSION_MINOR)
+
+#include "sfd_camera.h"
+#include "sfd_chi2.h"
+#include "sfd_config.h"
+#include "sfd_imu.h"
+#include "sfd_params.h"
+#include "sfd_prng.h"
+#include "sfd_rotation.h"
+#include "sfd_status.h"
+
+#endif /* SFD_H */

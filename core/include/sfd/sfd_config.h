@@ -1,0 +1,61 @@
+/* SPDX-License-Identifier: MIT */
+/**
+ * @file sfd_config.h
+ * @brief Compile-time capacities of the core. Every limit may be overridden with -D before
+ *        this header is included (all translation units of one build must agree).
+ *
+ * Memory cost (double = 8 bytes). The parity detector's state is dominated by the sliding
+ * window of observations, roughly
+ *     SFD_MAX_FEATURES * SFD_MAX_WINDOW * 48 bytes  (pixels, normalized coordinates, depth prior)
+ *   + SFD_MAX_FEATURES * 64 bytes                    (per-track bookkeeping)
+ * i.e. ~74 KiB for 256 features and L = 5; SPEC's budget for that case is 256 KiB, checked by
+ * the `proof.state_sizes` test. Stack per call is bounded separately (`proof.stack_usage`).
+ */
+#ifndef SFD_CONFIG_H
+#define SFD_CONFIG_H
+
+/** Features per frame the core accepts. Cost: linear in state size and per-frame time. */
+#ifndef SFD_MAX_FEATURES
+#define SFD_MAX_FEATURES 256
+#endif
+
+/** Longest sliding window L (frames) of the parity test. Cost: window storage is linear in L;
+ *  the per-group matrices grow as (2L)^2. */
+#ifndef SFD_MAX_WINDOW
+#define SFD_MAX_WINDOW 5
+#endif
+
+/** Largest parity-test group n (features tested jointly). Cost: per-group matrices grow as
+ *  (2Ln)^2 on the stack, so keep it small. */
+#ifndef SFD_MAX_GROUP
+#define SFD_MAX_GROUP 4
+#endif
+
+/** Hypothesis budget of the RANSAC-type methods per frame. Cost: bounded time only. */
+#ifndef SFD_MAX_HYPOTHESES
+#define SFD_MAX_HYPOTHESES 256
+#endif
+
+/** Largest chi-square degree of freedom with a precomputed threshold. Cost: 8 bytes each. */
+#ifndef SFD_CHI2_MAX_DOF
+#define SFD_CHI2_MAX_DOF 64
+#endif
+
+/** Newton iterations used to invert a lens distortion model (fixed, not a tolerance loop). */
+#ifndef SFD_UNDISTORT_ITERATIONS
+#define SFD_UNDISTORT_ITERATIONS 12
+#endif
+
+/** IMU samples a single gyro integration call may walk through (bounds the loop). */
+#ifndef SFD_MAX_IMU_SAMPLES
+#define SFD_MAX_IMU_SAMPLES 1024
+#endif
+
+#if SFD_MAX_FEATURES < 1 || SFD_MAX_WINDOW < 2 || SFD_MAX_GROUP < 1 || SFD_MAX_HYPOTHESES < 1
+#error "sfd_config.h: capacities out of range"
+#endif
+#if SFD_CHI2_MAX_DOF < 1 || SFD_CHI2_MAX_DOF > 512
+#error "sfd_config.h: SFD_CHI2_MAX_DOF must be in [1, 512]"
+#endif
+
+#endif /* SFD_CONFIG_H */

@@ -1,0 +1,64 @@
+/* SPDX-License-Identifier: MIT */
+/**
+ * @file sfd_params.h
+ * @brief The one parameter struct of the detectors, its defaults and its validation.
+ *
+ * C has no default member initializers: always start from sfd_params_default() and change the
+ * fields you need, then let the detector's init call sfd_params_validate().
+ */
+#ifndef SFD_PARAMS_H
+#define SFD_PARAMS_H
+
+#include <stdint.h>
+
+#include "sfd_config.h"
+#include "sfd_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Detection methods (SPEC "Commands", sfd-replay --method). */
+typedef enum {
+    SFD_METHOD_NONE = 0,    /**< accept every feature */
+    SFD_METHOD_PARITY = 1,  /**< parity-space test (Tornqvist et al. 2008) */
+    SFD_METHOD_OPRF = 2,    /**< one-point RANSAC with epipolar constraint (Kilic 2014) */
+    SFD_METHOD_RANSAC1 = 3, /**< 1-point RANSAC, reprojection distance (Civera et al. 2010) */
+    SFD_METHOD_RANSACF = 4, /**< fundamental-matrix RANSAC (Kilic 2014, Table 2) */
+    SFD_METHOD_BOTH = 5     /**< parity first, then OPRF on the survivors */
+} sfd_method_t;
+
+typedef struct {
+    int method;                  /**< sfd_method_t */
+    double pixel_sigma_px;       /**< std. dev. of a feature's pixel noise per axis (px), > 0 */
+    double false_alarm_rate;     /**< design alpha of the chi-square tests, in (0, 0.5] */
+    int window_frames;           /**< parity window L (frames), 2..SFD_MAX_WINDOW */
+    int group_size;              /**< parity group n (features), 1..SFD_MAX_GROUP */
+    int translation_known;       /**< 1: translation from the filter; 0: unknown (eq. 29-33) */
+    int exact_depth_covariance;  /**< 1: exact noise covariance eq. (22); 0: approximation (28) */
+    double default_depth_m;      /**< depth prior when a feature carries none (m), > 0 */
+    double default_depth_var_m2; /**< variance of that prior (m^2), >= 0 */
+    int max_hypotheses;          /**< RANSAC hypothesis budget per frame, 1..SFD_MAX_HYPOTHESES */
+    double ransac_confidence;  /**< probability p of eq. (27) of drawing one clean sample, (0, 1) */
+    double gyro_bias_rad_s[3]; /**< gyro bias subtracted before integration (rad/s) */
+    int64_t max_imu_gap_us;    /**< largest IMU sample gap inside a frame interval (us), > 0 */
+    uint64_t seed;             /**< PRNG seed of the RANSAC-type methods */
+} sfd_params_t;
+
+/** @brief Fills @p p with the defaults: method PARITY, 1 px, alpha 0.01, L = 3, n = 3, unknown
+ *         translation, exact covariance (22), depth 10 m with variance 0, 100 hypotheses,
+ *         confidence 0.99, zero gyro bias, 50 ms IMU gap, seed 1.
+ *  @return SFD_OK; SFD_ERR_INVAL for null. */
+sfd_status_t sfd_params_default(sfd_params_t *p);
+
+/** @brief Checks every field against its range and the compile-time capacities.
+ *  @return SFD_OK; SFD_ERR_INVAL for null or a value out of range (non-finite included);
+ *          SFD_ERR_CAPACITY for window_frames, group_size or max_hypotheses above the
+ *          capacity of sfd_config.h. */
+sfd_status_t sfd_params_validate(const sfd_params_t *p);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SFD_PARAMS_H */

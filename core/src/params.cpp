@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: MIT
+#include "core_private.hpp"
+#include "sfd/sfd_params.h"
+
+extern "C" sfd_status_t sfd_params_default(sfd_params_t *p) {
+    if (p == nullptr) return SFD_ERR_INVAL;
+    *p = sfd_params_t{};  // all zero: no bias, no flags
+    p->method = SFD_METHOD_PARITY;
+    p->pixel_sigma_px = 1.0;
+    p->false_alarm_rate = 0.01;
+    p->window_frames = (SFD_MAX_WINDOW < 3) ? SFD_MAX_WINDOW : 3;
+    p->group_size = (SFD_MAX_GROUP < 3) ? SFD_MAX_GROUP : 3;
+    p->translation_known = 0;
+    p->exact_depth_covariance = 1;
+    p->default_depth_m = 10.0;
+    p->default_depth_var_m2 = 0.0;
+    p->max_hypotheses = (SFD_MAX_HYPOTHESES < 100) ? SFD_MAX_HYPOTHESES : 100;
+    p->ransac_confidence = 0.99;
+    p->max_imu_gap_us = 50000;
+    p->seed = 1U;
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_params_validate(const sfd_params_t *p) {
+    if (p == nullptr) return SFD_ERR_INVAL;
+    if (p->method < SFD_METHOD_NONE || p->method > SFD_METHOD_BOTH) return SFD_ERR_INVAL;
+    if (!(std::isfinite(p->pixel_sigma_px) && p->pixel_sigma_px > 0.0)) return SFD_ERR_INVAL;
+    if (!(p->false_alarm_rate > 0.0 && p->false_alarm_rate <= 0.5)) return SFD_ERR_INVAL;
+    if (p->window_frames < 2 || p->group_size < 1 || p->max_hypotheses < 1) return SFD_ERR_INVAL;
+    if (p->window_frames > SFD_MAX_WINDOW || p->group_size > SFD_MAX_GROUP ||
+        p->max_hypotheses > SFD_MAX_HYPOTHESES) {
+        return SFD_ERR_CAPACITY;
+    }
+    if (p->translation_known != 0 && p->translation_known != 1) return SFD_ERR_INVAL;
+    if (p->exact_depth_covariance != 0 && p->exact_depth_covariance != 1) return SFD_ERR_INVAL;
+    if (!(std::isfinite(p->default_depth_m) && p->default_depth_m > 0.0)) return SFD_ERR_INVAL;
+    if (!(std::isfinite(p->default_depth_var_m2) && p->default_depth_var_m2 >= 0.0)) {
+        return SFD_ERR_INVAL;
+    }
+    if (!(p->ransac_confidence > 0.0 && p->ransac_confidence < 1.0)) return SFD_ERR_INVAL;
+    if (!sfd::all_finite(p->gyro_bias_rad_s, 3)) return SFD_ERR_INVAL;
+    if (p->max_imu_gap_us <= 0) return SFD_ERR_INVAL;
+    return SFD_OK;
+}

@@ -1,0 +1,41 @@
+/* SPDX-License-Identifier: MIT */
+/* proof.state_sizes: sizeof every caller-owned core state struct, printed and checked against
+ * SPEC's memory budget (core state <= 256 KiB for 256 features and L = 5). The same checks are
+ * compile-time assertions, so a cross build (Cortex-M7) that cannot run this still proves them. */
+#include <stdio.h>
+
+#include <sfd/sfd.h>
+
+#ifndef SFD_STATE_BUDGET_BYTES
+#define SFD_STATE_BUDGET_BYTES 262144
+#endif
+
+/* One detector's worth of state: everything a caller instantiates per camera. Grows as the
+ * detectors land (parity window, EKF, OPRF scratch). */
+#define SFD_STATE_TOTAL                                                       \
+    (sizeof(sfd_params_t) + sizeof(sfd_camera_t) + sizeof(sfd_extrinsics_t) + \
+     sizeof(sfd_chi2_table_t) + sizeof(sfd_prng_t))
+
+_Static_assert(SFD_MAX_FEATURES != 256 || SFD_MAX_WINDOW != 5 ||
+                   SFD_STATE_TOTAL <= SFD_STATE_BUDGET_BYTES,
+               "core state exceeds SPEC's 256 KiB budget for 256 features and L = 5");
+
+#ifndef SFD_STATE_SIZES_NO_MAIN
+int main(void) {
+    printf(
+        "capacities: SFD_MAX_FEATURES=%d SFD_MAX_WINDOW=%d SFD_MAX_GROUP=%d "
+        "SFD_MAX_HYPOTHESES=%d SFD_CHI2_MAX_DOF=%d\n",
+        SFD_MAX_FEATURES, SFD_MAX_WINDOW, SFD_MAX_GROUP, SFD_MAX_HYPOTHESES, SFD_CHI2_MAX_DOF);
+    printf("%-22s %8zu B\n", "sfd_params_t", sizeof(sfd_params_t));
+    printf("%-22s %8zu B\n", "sfd_camera_t", sizeof(sfd_camera_t));
+    printf("%-22s %8zu B\n", "sfd_extrinsics_t", sizeof(sfd_extrinsics_t));
+    printf("%-22s %8zu B\n", "sfd_chi2_table_t", sizeof(sfd_chi2_table_t));
+    printf("%-22s %8zu B\n", "sfd_prng_t", sizeof(sfd_prng_t));
+    printf("%-22s %8zu B\n", "sfd_imu_sample_t", sizeof(sfd_imu_sample_t));
+    const size_t total = SFD_STATE_TOTAL;
+    printf("%-22s %8zu B of %d B budget\n", "total per detector", total, SFD_STATE_BUDGET_BYTES);
+    int ok = total <= (size_t)SFD_STATE_BUDGET_BYTES;
+    printf("%d passed, %d failed\n", ok, !ok);
+    return ok ? 0 : 1;
+}
+#endif
