@@ -20,6 +20,7 @@
 #include <cstring>
 #include <vector>
 
+#include "paper_uav.hpp"
 #include "sfd/sfd.h"
 
 namespace {
@@ -29,19 +30,39 @@ constexpr double kPi = 3.14159265358979323846;
 struct Options {
     const char *scenario = nullptr;
     uint64_t seed = 1;
-    int frames = 200;
-    int features = 200;
+    int frames = -1;    // scenario default
+    int features = -1;  // scenario default
     double alpha = 0.01;
+    int windows = 10000;
+    int window_frames = 2;
+    int group_size = 3;
+    double outlier_ratio = 0.1;
+    double jump_px = 8.0;
+    const char *csv_dir = nullptr;
 };
 
 void usage(FILE *out) {
     std::fprintf(out,
-                 "usage: sfd-sim SCENARIO [--seed N] [--frames N] [--features N] [--alpha A]\n"
-                 "  SCENARIO  paper-uav   helicopter at 58 m, downward camera, 40x40 m features\n"
-                 "  --seed N      PRNG seed (default 1)\n"
-                 "  --frames N    camera frames at 20 Hz (default 200, 1..100000)\n"
-                 "  --features N  features in the map (default 200, 1..%d)\n"
-                 "  --alpha A     design false-alarm rate of the printed thresholds (0.01)\n"
+                 "usage: sfd-sim SCENARIO [options]\n"
+                 "Scenarios:\n"
+                 "  paper-uav   Tornqvist et al. 2008 Section IV: helicopter at 58 m, downward\n"
+                 "              camera, features over 40x40 m; parity test Monte Carlo: P_fa and\n"
+                 "              P_d against the non-central chi-square, Figure 1 and ROC CSVs\n"
+                 "  isolation   sfd isolation vs the paper's discard-the-group rule at equal\n"
+                 "              detection probability, simulated flight with mistracks\n"
+                 "  uav-imu     gyro integration and IMU-predicted pixel motion over the paper's\n"
+                 "              flight (camera model + gyro integration check)\n"
+                 "Options:\n"
+                 "  --seed N            PRNG seed (default 1)\n"
+                 "  --windows N         paper-uav: Monte Carlo windows per case (10000)\n"
+                 "  --window-frames L   paper-uav: window length (2, the paper's)\n"
+                 "  --group-size n      paper-uav: group size (3)\n"
+                 "  --frames N          isolation / uav-imu: frames at 20 Hz (200)\n"
+                 "  --features N        isolation / uav-imu: features (240 / 200, max %d)\n"
+                 "  --outlier-ratio R   isolation: fraction of spurious features (0.1)\n"
+                 "  --jump-px P         isolation: mistrack jump (8 px)\n"
+                 "  --alpha A           uav-imu: false-alarm rate of the printed thresholds\n"
+                 "  --csv-dir DIR       write the scenario's CSV files into DIR\n"
                  "Exit: 0 ok, 2 bad usage, 1 internal failure.\n",
                  SFD_MAX_FEATURES);
 }
@@ -98,7 +119,7 @@ void body_rate(double t, double w_C[3]) {
     for (int k = 0; k < 3; ++k) w_C[k] = phi[k] / (2.0 * h);
 }
 
-int run_paper_uav(const Options &opt) {
+int run_uav_imu(const Options &opt) {
     sfd_prng_t rng;
     sfd_prng_seed(&rng, opt.seed);
     sfd_camera_t cam;
@@ -201,7 +222,7 @@ int run_paper_uav(const Options &opt) {
         }
         n_visible_total += visible;
     }
-    std::printf("sfd-sim paper-uav: seed %" PRIu64 ", %d frames at 20 Hz, %d map features\n",
+    std::printf("sfd-sim uav-imu: seed %" PRIu64 ", %d frames at 20 Hz, %d map features\n",
                 opt.seed, opt.frames, opt.features);
     std::printf("  features in view per frame (mean)   %.1f\n",
                 opt.frames > 1 ? static_cast<double>(n_visible_total) / (opt.frames - 1) : 0.0);
@@ -259,6 +280,39 @@ int main(int argc, char **argv) {
                 std::fprintf(stderr, "sfd-sim: --alpha: expected (0, 1), got %s\n", argv[i]);
                 return 2;
             }
+        } else if (!std::strcmp(a, "--windows") && i + 1 < argc) {
+            if (!parse_int(argv[++i], 10, 10000000, &v)) {
+                std::fprintf(stderr, "sfd-sim: --windows: expected 10..10000000, got %s\n",
+                             argv[i]);
+                return 2;
+            }
+            opt.windows = static_cast<int>(v);
+        } else if (!std::strcmp(a, "--window-frames") && i + 1 < argc) {
+            if (!parse_int(argv[++i], 2, SFD_MAX_WINDOW, &v)) {
+                std::fprintf(stderr, "sfd-sim: --window-frames: expected 2..%d, got %s\n",
+                             SFD_MAX_WINDOW, argv[i]);
+                return 2;
+            }
+            opt.window_frames = static_cast<int>(v);
+        } else if (!std::strcmp(a, "--group-size") && i + 1 < argc) {
+            if (!parse_int(argv[++i], 1, SFD_MAX_GROUP, &v)) {
+                std::fprintf(stderr, "sfd-sim: --group-size: expected 1..%d, got %s\n",
+                             SFD_MAX_GROUP, argv[i]);
+                return 2;
+            }
+            opt.group_size = static_cast<int>(v);
+        } else if ((!std::strcmp(a, "--outlier-ratio") || !std::strcmp(a, "--jump-px")) &&
+                   i + 1 < argc) {
+            char *end = nullptr;
+            const double x = std::strtod(argv[++i], &end);
+            const bool ratio = !std::strcmp(a, "--outlier-ratio");
+            if (*end != '\0' || !(x >= 0.0) || (ratio && x > 1.0) || (!ratio && x > 1000.0)) {
+                std::fprintf(stderr, "sfd-sim: %s: out of range: %s\n", a, argv[i]);
+                return 2;
+            }
+            (ratio ? opt.outlier_ratio : opt.jump_px) = x;
+        } else if (!std::strcmp(a, "--csv-dir") && i + 1 < argc) {
+            opt.csv_dir = argv[++i];
         } else if (a[0] != '-' && opt.scenario == nullptr) {
             opt.scenario = a;
         } else {
@@ -272,7 +326,32 @@ int main(int argc, char **argv) {
         usage(stderr);
         return 2;
     }
-    if (!std::strcmp(opt.scenario, "paper-uav")) return run_paper_uav(opt);
-    std::fprintf(stderr, "sfd-sim: unknown scenario: %s (available: paper-uav)\n", opt.scenario);
+    if (!std::strcmp(opt.scenario, "paper-uav")) {
+        sfdsim::PaperOptions po;
+        po.seed = opt.seed;
+        po.windows = opt.windows;
+        po.window_frames = opt.window_frames;
+        po.group_size = opt.group_size;
+        po.out_dir = opt.csv_dir ? opt.csv_dir : "";
+        return sfdsim::run_paper_uav(po);
+    }
+    if (!std::strcmp(opt.scenario, "isolation")) {
+        sfdsim::IsolationOptions io;
+        io.seed = opt.seed;
+        io.frames = opt.frames > 0 ? opt.frames : 200;
+        io.features = opt.features > 0 ? opt.features : 240;
+        io.outlier_ratio = opt.outlier_ratio;
+        io.jump_px = opt.jump_px;
+        io.out_dir = opt.csv_dir ? opt.csv_dir : "";
+        return sfdsim::run_isolation(io);
+    }
+    if (!std::strcmp(opt.scenario, "uav-imu")) {
+        if (opt.frames < 0) opt.frames = 200;
+        if (opt.features < 0) opt.features = 200;
+        return run_uav_imu(opt);
+    }
+    std::fprintf(stderr,
+                 "sfd-sim: unknown scenario: %s (available: paper-uav, isolation, uav-imu)\n",
+                 opt.scenario);
     return 2;
 }

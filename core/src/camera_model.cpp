@@ -249,6 +249,12 @@ sfd_status_t undistort_impl(const sfd_camera_t *cam, const double uv_px[2], Vec2
     if (!camera_valid(cam) || uv_px == nullptr || !all_finite(uv_px, 2)) return SFD_ERR_INVAL;
     const Vec2 uv(uv_px[0], uv_px[1]);
     const Vec2 d_target((uv(0) - cam->cx_px) / cam->fx_px, (uv(1) - cam->cy_px) / cam->fy_px);
+    if (cam->model == SFD_DISTORTION_PINHOLE) {  // no distortion: K^{-1} uv, exactly
+        if (!finite2(d_target)) return SFD_ERR_NUMERIC;
+        *xn = d_target;
+        *J_xn_uv << 1.0 / cam->fx_px, 0.0, 0.0, 1.0 / cam->fy_px;
+        return SFD_OK;
+    }
 
     Vec2 x = Vec2::Zero();
     const bool solved = (cam->model == SFD_DISTORTION_EQUIDISTANT)

@@ -23,6 +23,8 @@
 
 #pragma GCC poison malloc calloc realloc free aligned_alloc posix_memalign
 
+static_assert(std::numeric_limits<double>::is_iec559, "sfd core assumes IEEE 754 doubles");
+
 namespace sfd {
 
 using Vec2 = Eigen::Matrix<double, 2, 1>;

@@ -12,6 +12,7 @@ extern "C" sfd_status_t sfd_params_default(sfd_params_t *p) {
     p->group_size = (SFD_MAX_GROUP < 3) ? SFD_MAX_GROUP : 3;
     p->translation_known = 0;
     p->exact_depth_covariance = 1;
+    p->parity_isolation = 1;
     p->default_depth_m = 10.0;
     p->default_depth_var_m2 = 0.0;
     p->max_hypotheses = (SFD_MAX_HYPOTHESES < 100) ? SFD_MAX_HYPOTHESES : 100;
@@ -33,6 +34,7 @@ extern "C" sfd_status_t sfd_params_validate(const sfd_params_t *p) {
     }
     if (p->translation_known != 0 && p->translation_known != 1) return SFD_ERR_INVAL;
     if (p->exact_depth_covariance != 0 && p->exact_depth_covariance != 1) return SFD_ERR_INVAL;
+    if (p->parity_isolation != 0 && p->parity_isolation != 1) return SFD_ERR_INVAL;
     if (!(std::isfinite(p->default_depth_m) && p->default_depth_m > 0.0)) return SFD_ERR_INVAL;
     if (!(std::isfinite(p->default_depth_var_m2) && p->default_depth_var_m2 >= 0.0)) {
         return SFD_ERR_INVAL;

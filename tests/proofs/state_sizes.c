@@ -12,9 +12,7 @@
 
 /* One detector's worth of state: everything a caller instantiates per camera. Grows as the
  * detectors land (parity window, EKF, OPRF scratch). */
-#define SFD_STATE_TOTAL                                                       \
-    (sizeof(sfd_params_t) + sizeof(sfd_camera_t) + sizeof(sfd_extrinsics_t) + \
-     sizeof(sfd_chi2_table_t) + sizeof(sfd_prng_t))
+#define SFD_STATE_TOTAL (sizeof(sfd_parity_t) + sizeof(sfd_extrinsics_t) + sizeof(sfd_prng_t))
 
 _Static_assert(SFD_MAX_FEATURES != 256 || SFD_MAX_WINDOW != 5 ||
                    SFD_STATE_TOTAL <= SFD_STATE_BUDGET_BYTES,
@@ -32,6 +30,10 @@ int main(void) {
     printf("%-22s %8zu B\n", "sfd_chi2_table_t", sizeof(sfd_chi2_table_t));
     printf("%-22s %8zu B\n", "sfd_prng_t", sizeof(sfd_prng_t));
     printf("%-22s %8zu B\n", "sfd_imu_sample_t", sizeof(sfd_imu_sample_t));
+    printf("%-22s %8zu B (window of %d frames x %d features)\n", "sfd_parity_t",
+           sizeof(sfd_parity_t), SFD_MAX_WINDOW, SFD_MAX_FEATURES);
+    printf("%-22s %8zu B (caller's input frame)\n", "sfd_frame_t", sizeof(sfd_frame_t));
+    printf("%-22s %8zu B (caller's output)\n", "sfd_verdict_t", sizeof(sfd_verdict_t));
     const size_t total = SFD_STATE_TOTAL;
     printf("%-22s %8zu B of %d B budget\n", "total per detector", total, SFD_STATE_BUDGET_BYTES);
     int ok = total <= (size_t)SFD_STATE_BUDGET_BYTES;

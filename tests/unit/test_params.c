@@ -53,6 +53,7 @@ static void params_out_of_range_rejected(void **state) {
     EXPECT_FIELD(max_hypotheses, SFD_MAX_HYPOTHESES + 1, SFD_ERR_CAPACITY);
     EXPECT_FIELD(translation_known, 2, SFD_ERR_INVAL);
     EXPECT_FIELD(exact_depth_covariance, -1, SFD_ERR_INVAL);
+    EXPECT_FIELD(parity_isolation, 2, SFD_ERR_INVAL);
     EXPECT_FIELD(default_depth_m, -1.0, SFD_ERR_INVAL);
     EXPECT_FIELD(default_depth_var_m2, -0.5, SFD_ERR_INVAL);
     EXPECT_FIELD(ransac_confidence, 1.0, SFD_ERR_INVAL);

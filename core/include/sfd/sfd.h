@@ -19,6 +19,7 @@
 #include "sfd_config.h"
 #include "sfd_imu.h"
 #include "sfd_params.h"
+#include "sfd_parity.h"
 #include "sfd_prng.h"
 #include "sfd_rotation.h"
 #include "sfd_status.h"

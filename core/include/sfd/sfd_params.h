@@ -36,6 +36,8 @@ typedef struct {
     int group_size;              /**< parity group n (features), 1..SFD_MAX_GROUP */
     int translation_known;       /**< 1: translation from the filter; 0: unknown (eq. 29-33) */
     int exact_depth_covariance;  /**< 1: exact noise covariance eq. (22); 0: approximation (28) */
+    int parity_isolation;        /**< 1: isolate spurious features inside failing groups (sfd);
+                                      0: discard every feature of a failing group (paper) */
     double default_depth_m;      /**< depth prior when a feature carries none (m), > 0 */
     double default_depth_var_m2; /**< variance of that prior (m^2), >= 0 */
     int max_hypotheses;          /**< RANSAC hypothesis budget per frame, 1..SFD_MAX_HYPOTHESES */
@@ -46,8 +48,8 @@ typedef struct {
 } sfd_params_t;
 
 /** @brief Fills @p p with the defaults: method PARITY, 1 px, alpha 0.01, L = 3, n = 3, unknown
- *         translation, exact covariance (22), depth 10 m with variance 0, 100 hypotheses,
- *         confidence 0.99, zero gyro bias, 50 ms IMU gap, seed 1.
+ *         translation, exact covariance (22), isolation on, depth 10 m with variance 0, 100
+ * hypotheses, confidence 0.99, zero gyro bias, 50 ms IMU gap, seed 1.
  *  @return SFD_OK; SFD_ERR_INVAL for null. */
 sfd_status_t sfd_params_default(sfd_params_t *p);
 

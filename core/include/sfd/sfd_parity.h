@@ -1,0 +1,268 @@
+/* SPDX-License-Identifier: MIT */
+/**
+ * @file sfd_parity.h
+ * @brief Stochastic parity-space test for spurious features (Tornqvist, Schon, Gustafsson 2008),
+ *        with isolation inside failing groups and fault-signature classification (sfd additions).
+ *
+ * Two levels:
+ * - sfd_parity_test_group(): the test of eqs. (24)-(33) on one group of n features over a window
+ *   of L frames, from explicit inputs. Used by the detector, the paper reproduction and tests.
+ * - sfd_parity_t: the detector. It keeps the sliding window of tracked features (caller-owned,
+ *   fixed size), forms groups, runs the group tests, isolates the spurious features, and writes one
+ *   verdict per input feature.
+ *
+ * Frames and symbols (paper notation): frame 0 is the oldest frame of the window and plays the
+ * world frame. R_t = R_C0toCt rotates frame-0 coordinates into camera t (R_0 = I); p_t is camera
+ * t's centre in frame 0 (m). y_{i,t} are undistorted normalized coordinates (x/z, y/z) of feature
+ * i in frame t; zhat_{i,t} its predicted depth along camera t's optical axis (m).
+ *
+ * Design note with the derivations and every assumption the paper leaves open:
+ * core/docs/parity_space.md.
+ */
+#ifndef SFD_PARITY_H
+#define SFD_PARITY_H
+
+#include <stdint.h>
+
+#include "sfd_camera.h"
+#include "sfd_chi2.h"
+#include "sfd_config.h"
+#include "sfd_params.h"
+#include "sfd_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Largest residual dimension of one group: n (2L - 2) when the rotations leave the feature depth
+ *  unobservable (rank(O_i) = 2); (2L - 3) n otherwise. */
+#define SFD_PARITY_MAX_RESIDUAL (SFD_MAX_GROUP * (2 * SFD_MAX_WINDOW - 2))
+
+/* ---------------------------------------------------------------------------------------------
+ * Group test
+ * ------------------------------------------------------------------------------------------- */
+
+/** One group of n features over L frames: the inputs of eqs. (24)-(33). */
+typedef struct {
+    int32_t window_frames;     /**< L, 2..SFD_MAX_WINDOW */
+    int32_t group_size;        /**< n, 1..SFD_MAX_GROUP */
+    int32_t translation_known; /**< 1: p_t given (Section III-A); 0: eliminated (III-B) */
+    int32_t
+        exact_depth_covariance; /**< 1: depth term of eq. (22) from y_pred; 0: eq. (28) from y */
+    double R_C0toCt[SFD_MAX_WINDOW][9];         /**< R_t, row-major; [0] must be identity */
+    double p_CtInC0_m[SFD_MAX_WINDOW][3];       /**< p_t (m); used when translation_known */
+    double y[SFD_MAX_GROUP][SFD_MAX_WINDOW][2]; /**< measured normalized coordinates */
+    double y_pred[SFD_MAX_GROUP][SFD_MAX_WINDOW]
+                 [2]; /**< predicted (xhat/zhat, yhat/zhat), eq. (22) */
+    double cov_y[SFD_MAX_GROUP][SFD_MAX_WINDOW][3]; /**< sensor noise Cov(e^c) of y: xx, xy, yy */
+    double depth_m[SFD_MAX_GROUP][SFD_MAX_WINDOW];  /**< zhat_{i,t} > 0 (m) */
+    double depth_var_m2[SFD_MAX_GROUP][SFD_MAX_WINDOW]; /**< P_z = Cov(zhat_{i,t}) >= 0 (m^2) */
+} sfd_parity_group_t;
+
+/** Outcome of one group test. All GLR values are chi-square distributed under H0 with the dof
+ *  beside them. */
+typedef struct {
+    int32_t per_feature_dim; /**< d = 2L - rank(O_i): residual dimension of one feature */
+    int32_t residual_dim;    /**< nu of the group test: n d (known), (n - 1) d (unknown) */
+    int32_t rank_O;          /**< rank of the per-feature observability block O_i (3 or 2) */
+    double glr;              /**< eq. (13) with the general fault (H^f = I): |rbar|^2 */
+    double feature_glr[SFD_MAX_GROUP];  /**< GLR of a general fault on feature j alone */
+    int32_t feature_dof[SFD_MAX_GROUP]; /**< its dof (d, or 0 when the group cannot tell) */
+    double jump_glr[SFD_MAX_GROUP];     /**< GLR of a jump: fault on feature j's newest y only */
+    int32_t jump_dof[SFD_MAX_GROUP];    /**< its dof (<= 2) */
+    double drift_glr[SFD_MAX_GROUP];    /**< GLR of a drift: fault growing linearly in t */
+    int32_t drift_dof[SFD_MAX_GROUP];   /**< its dof (<= 2) */
+    double whitened[SFD_PARITY_MAX_RESIDUAL]; /**< rbar = W^T Z (eq. 10/26/30), residual_dim long */
+} sfd_parity_result_t;
+
+/**
+ * @brief Runs the parity test of eqs. (24)-(33) on one group.
+ *
+ * Residual: r = B^T Z with B an orthonormal basis of the orthogonal complement of O (eq. 27) or
+ * of Otilde = [O O_2] (eqs. 29-33); whitened rbar = L^{-1} r with L L^T = B^T S B (a Cholesky
+ * whitening: it differs from (B^T S B)^{-1/2} by an orthogonal matrix, which leaves every GLR
+ * statistic unchanged); glr = |rbar|^2 = eq. (13) with H^f = I.
+ *
+ * @return SFD_OK (a group whose residual dimension is 0 is OK with glr = 0 and residual_dim = 0:
+ *         it cannot be tested); SFD_ERR_INVAL for null, sizes out of range, non-finite values,
+ *         depth <= 0, negative variance or R_0 != I; SFD_ERR_NUMERIC when a noise covariance
+ *         B^T S B is not positive definite (e.g. zero pixel noise).
+ */
+sfd_status_t sfd_parity_test_group(const sfd_parity_group_t *group, sfd_parity_result_t *result);
+
+/**
+ * @brief Non-centrality lambda of eq. (16) for an additive fault on one measurement: y of feature
+ *        @p feature in frame @p frame moves by @p fault (normalized coordinates). The group GLR is
+ *        then non-central chi-square with residual_dim dof and this lambda.
+ * @return as sfd_parity_test_group(), plus SFD_ERR_INVAL for an index out of range.
+ */
+sfd_status_t sfd_parity_noncentrality(const sfd_parity_group_t *group, int32_t feature,
+                                      int32_t frame, const double fault[2], double *lambda);
+
+/**
+ * @brief Orthonormal basis of the orthogonal complement of O (known translation) or Otilde
+ *        (unknown) for a whole group, as a dense row-major (2 n L) x dim matrix in @p basis
+ *        (capacity @p capacity doubles). Rows are ordered feature-major: row 2(L i + t) + c is
+ *        coordinate c of feature i in frame t. For tests and tools; the detector never forms it.
+ * @return SFD_OK; SFD_ERR_INVAL; SFD_ERR_CAPACITY when capacity < 2 n L dim.
+ */
+sfd_status_t sfd_parity_group_basis(const sfd_parity_group_t *group, double *basis,
+                                    int32_t capacity, int32_t *dim);
+
+/* ---------------------------------------------------------------------------------------------
+ * Detector
+ * ------------------------------------------------------------------------------------------- */
+
+/** Per-feature verdict status (numerically identical to the LCM feature_verdict_t constants). */
+enum { SFD_VERDICT_UNTESTED = 0, SFD_VERDICT_CONSISTENT = 1, SFD_VERDICT_SPURIOUS = 2 };
+
+/** Stage that decided (numerically identical to the LCM constants). */
+enum {
+    SFD_STAGE_NONE = 0,
+    SFD_STAGE_PARITY = 1,
+    SFD_STAGE_OPRF = 2,
+    SFD_STAGE_RANSAC_1PT = 3,
+    SFD_STAGE_RANSAC_F = 4
+};
+
+/** Why a feature got its verdict. */
+enum {
+    SFD_REASON_NONE = 0,        /**< tested in its group, group consistent */
+    SFD_REASON_SHORT_TRACK = 1, /**< UNTESTED: tracked for fewer than L frames */
+    SFD_REASON_BAD_INPUT = 2, /**< UNTESTED: non-finite pixel, duplicate id, undistortion failed */
+    SFD_REASON_NO_GROUP = 3,  /**< UNTESTED: too few testable features for a group or reference */
+    SFD_REASON_RANK = 4,      /**< UNTESTED: geometry leaves no residual (nu = 0) */
+    SFD_REASON_NUMERIC = 5,   /**< UNTESTED: noise covariance not positive definite */
+    SFD_REASON_GROUP_FAILED = 6, /**< SPURIOUS: member of a failing group (paper's discard rule) */
+    SFD_REASON_ISOLATED = 7,     /**< decided by isolation inside / re-test outside its group */
+    SFD_REASON_INCONCLUSIVE = 8  /**< SPURIOUS: group failed, isolation could not clear it */
+};
+
+/** Fault signature of a SPURIOUS feature (needs L >= 3 to tell them apart). */
+enum { SFD_FAULT_NONE = 0, SFD_FAULT_JUMP = 1, SFD_FAULT_DRIFT = 2, SFD_FAULT_UNKNOWN = 3 };
+
+/** Per-frame flag bits of sfd_verdict_t.flags. */
+#define SFD_FLAG_PARITY_ALARM 0x1u   /**< at least one group failed */
+#define SFD_FLAG_RANK_DEFICIENT 0x2u /**< rotations left the depth unobservable (rank(O_i) = 2) */
+#define SFD_FLAG_WINDOW_FILLING 0x4u /**< fewer than L frames in the window: nothing tested */
+#define SFD_FLAG_BAD_FEATURES 0x8u   /**< some input features were rejected */
+#define SFD_FLAG_NO_REFERENCE 0x10u  /**< isolation had no consistent reference features */
+
+/** One feature of an input frame. */
+typedef struct {
+    int64_t track_id;    /**< stable across frames */
+    double u_px, v_px;   /**< raw (distorted) pixel coordinates */
+    double depth_m;      /**< depth prior along the optical axis (m); <= 0: unknown, use default */
+    double depth_var_m2; /**< variance of that prior (m^2) */
+} sfd_feature_t;
+
+/** One camera frame. Large (SFD_MAX_FEATURES entries): declare it static or in caller storage. */
+typedef struct {
+    int64_t utime;        /**< frame time (us), strictly increasing */
+    int32_t num_features; /**< 0..SFD_MAX_FEATURES */
+    sfd_feature_t features[SFD_MAX_FEATURES];
+} sfd_frame_t;
+
+/** Camera motion from the previous frame to this one (unused for the first frame). */
+typedef struct {
+    double R_CcurToCprev[9];   /**< camera rotation (from the gyro through the extrinsics) */
+    int32_t translation_known; /**< 1: p_CcurInCprev_m is the filter's estimate */
+    double p_CcurInCprev_m[3]; /**< current camera centre in the previous camera frame (m) */
+} sfd_frame_motion_t;
+
+/** Verdict on one input feature. */
+typedef struct {
+    int64_t track_id;
+    int8_t status;     /**< SFD_VERDICT_* */
+    int8_t stage;      /**< SFD_STAGE_* (PARITY when tested, NONE when not) */
+    int8_t reason;     /**< SFD_REASON_* */
+    int8_t fault_kind; /**< SFD_FAULT_* (SPURIOUS only) */
+    int16_t dof;       /**< dof of the deciding test */
+    double statistic;  /**< deciding GLR / its threshold: > 1 rejects; 0 when untested */
+} sfd_feature_verdict_t;
+
+/** Verdict on one frame: every input feature, in input order. */
+typedef struct {
+    int64_t utime;
+    uint32_t flags; /**< SFD_FLAG_* */
+    int32_t num_features;
+    int32_t num_consistent, num_spurious, num_untested;
+    int32_t groups_tested, groups_failed;
+    sfd_feature_verdict_t features[SFD_MAX_FEATURES];
+} sfd_verdict_t;
+
+/** Window storage of one observation (plain data; fields are private to the detector). */
+typedef struct {
+    int64_t track_id;
+    double xn[2];     /* undistorted normalized coordinates */
+    double cov_xn[3]; /* pixel noise carried into normalized coordinates: xx, xy, yy */
+    double uv_px[2];  /* raw pixels, for the spatial grouping */
+    double depth_m;
+    double depth_var_m2;
+    int16_t prev;  /* index of this track in the previous frame, -1 none */
+    int16_t run;   /* consecutive frames observed, this one included (saturating) */
+    int16_t valid; /* 1 usable, 0 rejected input */
+    int16_t pad_;
+} sfd_parity_obs_t;
+
+typedef struct {
+    int64_t utime;
+    int32_t num;
+    int32_t translation_known;
+    double R_CtoCprev[9];
+    double p_CinCprev_m[3];
+    sfd_parity_obs_t obs[SFD_MAX_FEATURES];
+} sfd_parity_frame_t;
+
+#define SFD_PARITY_HASH_SLOTS (2 * SFD_MAX_FEATURES + 1)
+
+/** The detector: caller-owned, fixed size (see proof.state_sizes). Not reentrant: one detector
+ *  per thread; it is invalid to use one before sfd_parity_init() returned SFD_OK. */
+typedef struct {
+    uint32_t magic_;
+    sfd_params_t params;
+    sfd_camera_t camera;
+    sfd_chi2_table_t chi2;
+    int32_t head;  /* ring index of the newest frame */
+    int32_t count; /* frames in the ring, <= L */
+    sfd_parity_frame_t frames[SFD_MAX_WINDOW];
+    int16_t hash[2][SFD_PARITY_HASH_SLOTS]; /* track id -> index, for the newest two frames */
+    int32_t hash_cur;
+} sfd_parity_t;
+
+/**
+ * @brief Initializes the detector: validates @p params (window_frames, group_size,
+ *        false_alarm_rate, pixel_sigma_px, depth defaults, translation and covariance modes) and
+ *        copies them with @p camera; precomputes the chi-square thresholds.
+ * @return SFD_OK; SFD_ERR_INVAL / SFD_ERR_CAPACITY from validation (detector left unusable).
+ */
+sfd_status_t sfd_parity_init(sfd_parity_t *det, const sfd_params_t *params,
+                             const sfd_camera_t *camera);
+
+/** @brief Empties the window (after a sensor gap or a reset of the caller's tracker).
+ *  @return SFD_OK; SFD_ERR_STATE if not initialized; SFD_ERR_INVAL for null. */
+sfd_status_t sfd_parity_reset(sfd_parity_t *det);
+
+/**
+ * @brief Adds a frame to the window and judges every feature of it.
+ *
+ * Features tracked through all L frames of the window are tested; the others are UNTESTED with
+ * a reason. Features with bad values (non-finite, duplicate track id in the frame, a pixel the
+ * camera model cannot undistort) are UNTESTED (BAD_INPUT) and do not enter the window.
+ *
+ * @param motion  camera motion since the previous frame (ignored for the first frame after init
+ *                or reset; may be NULL then).
+ * @param out     verdict, one entry per input feature in input order (caller-owned).
+ * @return SFD_OK; SFD_ERR_INVAL for null or a motion that is not a rotation / non-finite
+ *         (window unchanged); SFD_ERR_CAPACITY for num_features outside [0, SFD_MAX_FEATURES]
+ *         (window unchanged); SFD_ERR_ORDER for utime not after the previous frame's (window
+ *         unchanged); SFD_ERR_STATE if not initialized.
+ */
+sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
+                                   const sfd_frame_motion_t *motion, sfd_verdict_t *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SFD_PARITY_H */

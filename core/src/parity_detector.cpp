@@ -1,0 +1,587 @@
+// SPDX-License-Identifier: MIT
+// The parity-space detector: sliding window of tracked features, deterministic grouping, group
+// tests, isolation inside failing groups, verdicts (sfd/sfd_parity.h, core/docs/parity_space.md).
+#include "core_private.hpp"
+#include "parity_space.hpp"
+#include "rotation.hpp"
+#include "sfd/sfd_camera.h"
+#include "sfd/sfd_parity.h"
+
+namespace sfd {
+namespace parity {
+namespace {
+
+constexpr uint32_t kMagic = 0x53464450u;  // "SFDP"
+constexpr int kSlots = SFD_PARITY_HASH_SLOTS;
+
+int hash_slot(int64_t id) {
+    const uint64_t h = static_cast<uint64_t>(id) * 0x9E3779B97F4A7C15ULL;
+    return static_cast<int>((h >> 17) % static_cast<uint64_t>(kSlots));
+}
+
+// Index stored for `id` in table, or -1. Linear probing, at most kSlots probes.
+int hash_find(const int16_t *table, const sfd_parity_frame_t &fr, int64_t id) {
+    int s = hash_slot(id);
+    for (int probe = 0; probe < kSlots; ++probe) {
+        const int16_t v = table[s];
+        if (v < 0) return -1;
+        if (fr.obs[v].track_id == id) return v;
+        s = (s + 1 == kSlots) ? 0 : s + 1;
+    }
+    return -1;
+}
+
+void hash_insert(int16_t *table, int64_t id, int16_t index) {
+    int s = hash_slot(id);
+    for (int probe = 0; probe < kSlots; ++probe) {
+        if (table[s] < 0) {
+            table[s] = index;
+            return;
+        }
+        s = (s + 1 == kSlots) ? 0 : s + 1;
+    }
+    // Unreachable: the table has more than twice as many slots as a frame has features.
+}
+
+// Spread-out ordering key: Morton (Z-order) code of the pixel position in 16-px cells. Walking
+// the Z-curve visits the image region by region, so taking every G-th feature of that walk puts
+// features of different regions into one group.
+uint32_t morton_key(const double uv[2]) {
+    uint32_t c[2];
+    for (int k = 0; k < 2; ++k) {
+        double v = uv[k] / 16.0;
+        v = (v < 0.0) ? 0.0 : ((v > 65535.0) ? 65535.0 : v);
+        c[k] = static_cast<uint32_t>(v);
+    }
+    uint32_t key = 0;
+    for (int b = 0; b < 16; ++b) {
+        key |= ((c[0] >> b) & 1u) << (2 * b);
+        key |= ((c[1] >> b) & 1u) << (2 * b + 1);
+    }
+    return key;
+}
+
+// Heap sort of idx[0..n) by (key, track id): no recursion, O(n log n), deterministic.
+struct SortView {
+    const uint32_t *key;
+    const sfd_parity_obs_t *obs;
+    bool less(int16_t a, int16_t b) const {
+        if (key[a] != key[b]) return key[a] < key[b];
+        return obs[a].track_id < obs[b].track_id;
+    }
+};
+
+void sift_down(int16_t *idx, int start, int end, const SortView &v) {
+    int root = start;
+    for (int guard = 0; guard < 32 && 2 * root + 1 < end; ++guard) {
+        int child = 2 * root + 1;
+        if (child + 1 < end && v.less(idx[child], idx[child + 1])) ++child;
+        if (!v.less(idx[root], idx[child])) return;
+        const int16_t t = idx[root];
+        idx[root] = idx[child];
+        idx[child] = t;
+        root = child;
+    }
+}
+
+void heap_sort(int16_t *idx, int n, const SortView &v) {
+    for (int start = n / 2 - 1; start >= 0; --start) sift_down(idx, start, n, v);
+    for (int end = n - 1; end > 0; --end) {
+        const int16_t t = idx[0];
+        idx[0] = idx[end];
+        idx[end] = t;
+        sift_down(idx, 0, end, v);
+    }
+}
+
+struct Window {
+    int L = 0;
+    bool translation_known = false;
+    int fidx[kMaxL] = {};  // ring index of window frame t (0 = oldest)
+    double R_C0toCt[kMaxL][9] = {};
+    double p_CtInC0[kMaxL][3] = {};
+    WindowBasis wb;
+};
+
+// Builds feature `i` (index in the newest frame)'s window data: follows the prev links back to
+// the oldest frame. y_dir is the predicted direction of eq. (22) (frame-0 observation, its depth
+// prior, transported with R_t and, when known, p_t) or the measured y of eq. (28).
+void load_window_feature(const sfd_parity_t &det, const Window &w, int i, FeatureWindow *fw) {
+    const int L = w.L;
+    int index[kMaxL];
+    index[L - 1] = i;
+    for (int t = L - 1; t > 0; --t) index[t - 1] = det.frames[w.fidx[t]].obs[index[t]].prev;
+    const sfd_parity_obs_t &o0 = det.frames[w.fidx[0]].obs[index[0]];
+    const double m0[3] = {o0.depth_m * o0.xn[0], o0.depth_m * o0.xn[1], o0.depth_m};
+    for (int t = 0; t < L; ++t) {
+        const sfd_parity_obs_t &o = det.frames[w.fidx[t]].obs[index[t]];
+        fw->y[t][0] = o.xn[0];
+        fw->y[t][1] = o.xn[1];
+        for (int c = 0; c < 3; ++c) fw->cov_y[t][c] = o.cov_xn[c];
+        fw->depth[t] = o.depth_m;
+        fw->depth_var[t] = o.depth_var_m2;
+        fw->y_dir[t][0] = o.xn[0];
+        fw->y_dir[t][1] = o.xn[1];
+        if (det.params.exact_depth_covariance) {
+            double m[3];
+            for (int r = 0; r < 3; ++r) {
+                m[r] = 0.0;
+                for (int k = 0; k < 3; ++k) {
+                    const double p = w.translation_known ? w.p_CtInC0[t][k] : 0.0;
+                    m[r] += w.R_C0toCt[t][3 * r + k] * (m0[k] - p);
+                }
+            }
+            if (m[2] > 1e-6) {
+                fw->y_dir[t][0] = m[0] / m[2];
+                fw->y_dir[t][1] = m[1] / m[2];
+            }
+        }
+    }
+}
+
+bool reduce(const sfd_parity_t &det, const Window &w, int i, FeatureReduced *out) {
+    FeatureWindow fw{};
+    load_window_feature(det, w, i, &fw);
+    return reduce_feature(w.wb, fw, w.R_C0toCt, w.p_CtInC0, w.translation_known, out);
+}
+
+void set_verdict(sfd_feature_verdict_t *v, int8_t status, int8_t reason, int nu, double T,
+                 double thr) {
+    v->status = status;
+    v->stage = SFD_STAGE_PARITY;
+    v->reason = reason;
+    v->dof = static_cast<int16_t>(nu);
+    v->statistic = (thr > 0.0) ? T / thr : 0.0;
+}
+
+void classify_fault(const GroupStats &gs, int j, int L, sfd_feature_verdict_t *v) {
+    if (L < 3) {
+        v->fault_kind = SFD_FAULT_UNKNOWN;  // a jump and a drift look alike over two frames
+        return;
+    }
+    v->fault_kind = (gs.jump_glr[j] >= gs.drift_glr[j]) ? SFD_FAULT_JUMP : SFD_FAULT_DRIFT;
+}
+
+// Work lists of one frame (kept off the stack: they live in the caller's verdict, see below).
+struct Lists {
+    int16_t testable[SFD_MAX_FEATURES];
+    int n_testable;
+    int8_t suspect[SFD_MAX_FEATURES];    // by index in the newest frame
+    float group_stat[SFD_MAX_FEATURES];  // normalized statistic of the passing group, by index
+};
+
+// Tests the groups; returns the number of groups tested.
+__attribute__((noinline)) void test_groups(sfd_parity_t *det, const Window &w, Lists *lists,
+                                           sfd_verdict_t *out) {
+    const int n = det->params.group_size;
+    const int d = w.wb.d;
+    const int G = lists->n_testable / n;
+    for (int g = 0; g < G; ++g) {
+        FeatureReduced fr[kMaxN];
+        const FeatureReduced *ptr[kMaxN];
+        int members[kMaxN];
+        bool ok = true;
+        for (int k = 0; k < n; ++k) {
+            members[k] = lists->testable[g + k * G];
+            ok = ok && reduce(*det, w, members[k], &fr[k]);
+            ptr[k] = &fr[k];
+        }
+        GroupStats gs;
+        if (ok) ok = group_stats(ptr, n, d, w.translation_known, false, &gs);
+        if (!ok) {
+            for (int k = 0; k < n; ++k) out->features[members[k]].reason = SFD_REASON_NUMERIC;
+            continue;
+        }
+        if (gs.nu <= 0) {
+            for (int k = 0; k < n; ++k) out->features[members[k]].reason = SFD_REASON_RANK;
+            continue;
+        }
+        out->groups_tested++;
+        const double thr = det->chi2.threshold[gs.nu];
+        if (gs.glr <= thr) {
+            for (int k = 0; k < n; ++k) {
+                set_verdict(&out->features[members[k]], SFD_VERDICT_CONSISTENT, SFD_REASON_NONE,
+                            gs.nu, gs.glr, thr);
+                lists->group_stat[members[k]] = static_cast<float>(gs.glr / thr);
+            }
+            continue;
+        }
+        out->groups_failed++;
+        out->flags |= SFD_FLAG_PARITY_ALARM;
+        if (!det->params.parity_isolation) {
+            GroupStats sig;
+            const bool have_sig = group_stats(ptr, n, d, w.translation_known, true, &sig);
+            for (int k = 0; k < n; ++k) {
+                sfd_feature_verdict_t *v = &out->features[members[k]];
+                set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_GROUP_FAILED, gs.nu, gs.glr, thr);
+                if (have_sig) classify_fault(sig, k, w.L, v);
+            }
+            continue;
+        }
+        for (int k = 0; k < n; ++k) {
+            lists->suspect[members[k]] = 1;
+            set_verdict(&out->features[members[k]], SFD_VERDICT_SPURIOUS, SFD_REASON_INCONCLUSIVE,
+                        gs.nu, gs.glr, thr);
+        }
+    }
+}
+
+// Isolation with a reference set of consistent features: candidate j is tested together with
+// the references (the features of the most consistent passing groups). Under H0 for j the
+// statistic is chi2 with |R| d dof (unknown translation) or d (known: references add nothing, the
+// features are independent, so j is tested alone).
+__attribute__((noinline)) void isolate_with_references(sfd_parity_t *det, const Window &w,
+                                                       Lists *lists, const int16_t *candidates,
+                                                       int n_candidates, sfd_verdict_t *out) {
+    const int d = w.wb.d;
+    const int n = det->params.group_size;
+    const int want_refs = w.translation_known ? 0 : n - 1;
+    FeatureReduced fr[kMaxN];
+    const FeatureReduced *ptr[kMaxN];
+    // Pick references: smallest passing-group statistic first (ties: grouping order).
+    int refs = 0;
+    for (int r = 0; r < want_refs; ++r) {
+        int best = -1;
+        for (int a = 0; a < lists->n_testable; ++a) {
+            const int i = lists->testable[a];
+            if (out->features[i].status != SFD_VERDICT_CONSISTENT ||
+                out->features[i].reason != SFD_REASON_NONE) {
+                continue;
+            }
+            if (lists->suspect[i] == 2) continue;  // already a reference
+            if (best < 0 || lists->group_stat[i] < lists->group_stat[best]) best = i;
+        }
+        if (best < 0) break;
+        lists->suspect[best] = 2;
+        if (!reduce(*det, w, best, &fr[1 + refs])) {
+            out->features[best].reason = SFD_REASON_NUMERIC;  // keeps its CONSISTENT verdict
+            continue;
+        }
+        ptr[1 + refs] = &fr[1 + refs];
+        ++refs;
+    }
+    if (!w.translation_known && refs == 0) {
+        out->flags |= SFD_FLAG_NO_REFERENCE;
+        return;
+    }
+    const int m = 1 + refs;
+    for (int c = 0; c < n_candidates; ++c) {
+        const int j = candidates[c];
+        sfd_feature_verdict_t *v = &out->features[j];
+        if (!reduce(*det, w, j, &fr[0])) {
+            v->status = SFD_VERDICT_UNTESTED;
+            v->stage = SFD_STAGE_NONE;
+            v->reason = SFD_REASON_NUMERIC;
+            v->statistic = 0.0;
+            continue;
+        }
+        ptr[0] = &fr[0];
+        GroupStats gs;
+        if (!group_stats(ptr, m, d, w.translation_known, false, &gs)) {
+            v->status = SFD_VERDICT_UNTESTED;
+            v->stage = SFD_STAGE_NONE;
+            v->reason = SFD_REASON_NUMERIC;
+            v->statistic = 0.0;
+            continue;
+        }
+        // Known translation: the candidate's own statistic; unknown: the re-test group's.
+        const double T = w.translation_known ? gs.feature_glr[0] : gs.glr;
+        const int nu = w.translation_known ? gs.feature_dof[0] : gs.nu;
+        const double thr = det->chi2.threshold[nu];
+        if (T <= thr) {
+            set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_ISOLATED, nu, T, thr);
+        } else {
+            set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_ISOLATED, nu, T, thr);
+            GroupStats sig;  // signatures only for the features found spurious
+            if (group_stats(ptr, m, d, w.translation_known, true, &sig)) {
+                classify_fault(sig, 0, w.L, v);
+            }
+        }
+        lists->suspect[j] = 0;
+    }
+}
+
+// Without references (no passing group): peel a failing group by its per-feature GLRs, the
+// largest first, re-testing the rest each time; bounded by n - 1 rounds.
+__attribute__((noinline)) void isolate_within_group(sfd_parity_t *det, const Window &w,
+                                                    int *members, int n, sfd_verdict_t *out) {
+    const int d = w.wb.d;
+    FeatureReduced fr[kMaxN];
+    const FeatureReduced *ptr[kMaxN];
+    for (int k = 0; k < n; ++k) {
+        if (!reduce(*det, w, members[k], &fr[k])) return;  // stays SPURIOUS/INCONCLUSIVE
+        ptr[k] = &fr[k];
+    }
+    int m = n;
+    for (int round = 0; round < n - 1 && m >= 2; ++round) {
+        GroupStats gs;
+        if (!group_stats(ptr, m, d, w.translation_known, true, &gs)) return;
+        int worst = 0;
+        for (int k = 1; k < m; ++k) {
+            if (gs.feature_glr[k] > gs.feature_glr[worst]) worst = k;
+        }
+        sfd_feature_verdict_t *v = &out->features[members[worst]];
+        const int nu_j = gs.feature_dof[worst] > 0 ? gs.feature_dof[worst] : gs.nu;
+        set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_ISOLATED, nu_j, gs.feature_glr[worst],
+                    det->chi2.threshold[nu_j]);
+        classify_fault(gs, worst, w.L, v);
+        // Remove it and re-test the rest.
+        members[worst] = members[m - 1];
+        ptr[worst] = ptr[m - 1];
+        --m;
+        GroupStats rest;
+        if (!group_stats(ptr, m, d, w.translation_known, false, &rest)) return;
+        if (rest.nu <= 0) return;  // what is left cannot be tested: stays INCONCLUSIVE
+        const double thr = det->chi2.threshold[rest.nu];
+        if (rest.glr <= thr) {
+            for (int k = 0; k < m; ++k) {
+                set_verdict(&out->features[members[k]], SFD_VERDICT_CONSISTENT, SFD_REASON_ISOLATED,
+                            rest.nu, rest.glr, thr);
+            }
+            return;
+        }
+    }
+}
+
+__attribute__((noinline)) bool build_window(const sfd_parity_t &det, Window *w) {
+    const int L = det.params.window_frames;
+    w->L = L;
+    bool known = det.params.translation_known != 0;
+    Mat3 R_CttoC0 = Mat3::Identity();
+    Vec3 p = Vec3::Zero();
+    for (int t = 0; t < L; ++t) {
+        w->fidx[t] = (det.head + 1 + t) % L;
+        const sfd_parity_frame_t &fr = det.frames[w->fidx[t]];
+        if (t > 0) {
+            const Mat3 R_step = Eigen::Map<const Mat3>(fr.R_CtoCprev);
+            // p_CtInC0 = p_C(t-1)InC0 + R_C(t-1)toC0 p_CtInC(t-1)
+            p += R_CttoC0 * Vec3(fr.p_CinCprev_m[0], fr.p_CinCprev_m[1], fr.p_CinCprev_m[2]);
+            R_CttoC0 = R_CttoC0 * R_step;
+            known = known && fr.translation_known != 0;
+        }
+        Eigen::Map<Mat3>(w->R_C0toCt[t]) = R_CttoC0.transpose();
+        w->p_CtInC0[t][0] = p.x();
+        w->p_CtInC0[t][1] = p.y();
+        w->p_CtInC0[t][2] = p.z();
+    }
+    w->translation_known = known;
+    return window_basis(w->R_C0toCt, L, &w->wb);
+}
+
+// Stores the new frame's observations and links them to the previous frame.
+__attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *frame,
+                                      const sfd_frame_motion_t *motion, int slot,
+                                      sfd_verdict_t *out) {
+    sfd_parity_frame_t &nf = det->frames[slot];
+    const bool have_prev = det->count > 0;
+    const int16_t *old_table = det->hash[det->hash_cur];
+    int16_t *new_table = det->hash[1 - det->hash_cur];
+    for (int s = 0; s < kSlots; ++s) new_table[s] = -1;
+    const sfd_parity_frame_t &pf = det->frames[det->head];
+    nf.utime = frame->utime;
+    nf.num = frame->num_features;
+    nf.translation_known = (motion != nullptr && have_prev) ? motion->translation_known : 0;
+    for (int k = 0; k < 9; ++k) {
+        nf.R_CtoCprev[k] = (motion != nullptr && have_prev) ? motion->R_CcurToCprev[k]
+                                                            : ((k % 4 == 0) ? 1.0 : 0.0);
+    }
+    for (int k = 0; k < 3; ++k) {
+        nf.p_CinCprev_m[k] = (motion != nullptr && have_prev && motion->translation_known)
+                                 ? motion->p_CcurInCprev_m[k]
+                                 : 0.0;
+    }
+    const double s2 = det->params.pixel_sigma_px * det->params.pixel_sigma_px;
+    for (int i = 0; i < frame->num_features; ++i) {
+        const sfd_feature_t &f = frame->features[i];
+        sfd_parity_obs_t &o = nf.obs[i];
+        sfd_feature_verdict_t &v = out->features[i];
+        // Zero the padding too, so verdicts are byte-deterministic (IEEE 754 zero is all-bits-0).
+        // cppcheck-suppress memsetClassFloat
+        std::memset(&v, 0, sizeof v);
+        v.track_id = f.track_id;
+        v.status = SFD_VERDICT_UNTESTED;
+        v.stage = SFD_STAGE_NONE;
+        v.reason = SFD_REASON_SHORT_TRACK;
+        v.fault_kind = SFD_FAULT_NONE;
+        v.dof = 0;
+        v.statistic = 0.0;
+        o.track_id = f.track_id;
+        o.prev = -1;
+        o.run = 0;
+        o.valid = 0;
+        o.pad_ = 0;
+        const double uv[2] = {f.u_px, f.v_px};
+        double J[4];
+        bool ok = all_finite(uv, 2) && sfd_camera_undistort(&det->camera, uv, o.xn, J) == SFD_OK &&
+                  hash_find(new_table, nf, f.track_id) < 0;
+        if (!ok) {
+            v.reason = SFD_REASON_BAD_INPUT;
+            out->flags |= SFD_FLAG_BAD_FEATURES;
+            continue;
+        }
+        // Cov(xn) = sigma^2 J J^T with J = d xn / d uv.
+        o.cov_xn[0] = s2 * (J[0] * J[0] + J[1] * J[1]);
+        o.cov_xn[1] = s2 * (J[0] * J[2] + J[1] * J[3]);
+        o.cov_xn[2] = s2 * (J[2] * J[2] + J[3] * J[3]);
+        o.uv_px[0] = f.u_px;
+        o.uv_px[1] = f.v_px;
+        const bool prior = std::isfinite(f.depth_m) && f.depth_m > 0.0 &&
+                           std::isfinite(f.depth_var_m2) && f.depth_var_m2 >= 0.0;
+        o.depth_m = prior ? f.depth_m : det->params.default_depth_m;
+        o.depth_var_m2 = prior ? f.depth_var_m2 : det->params.default_depth_var_m2;
+        o.valid = 1;
+        o.run = 1;
+        hash_insert(new_table, f.track_id, static_cast<int16_t>(i));
+        if (have_prev) {
+            const int p = hash_find(old_table, pf, f.track_id);
+            if (p >= 0 && pf.obs[p].valid) {
+                o.prev = static_cast<int16_t>(p);
+                o.run = static_cast<int16_t>(pf.obs[p].run >= SFD_MAX_WINDOW ? SFD_MAX_WINDOW
+                                                                             : pf.obs[p].run + 1);
+            }
+        }
+    }
+    det->hash_cur = 1 - det->hash_cur;
+}
+
+}  // namespace
+}  // namespace parity
+}  // namespace sfd
+
+using namespace sfd;
+using namespace sfd::parity;
+
+extern "C" sfd_status_t sfd_parity_init(sfd_parity_t *det, const sfd_params_t *params,
+                                        const sfd_camera_t *camera) {
+    if (det == nullptr || params == nullptr || camera == nullptr) return SFD_ERR_INVAL;
+    det->magic_ = 0;
+    const sfd_status_t v = sfd_params_validate(params);
+    if (v != SFD_OK) return v;
+    // A camera passes through sfd_camera_init's validation again (fields may be hand-filled).
+    sfd_camera_t cam;
+    const sfd_status_t c =
+        sfd_camera_init(&cam, camera->model, camera->width_px, camera->height_px, camera->fx_px,
+                        camera->fy_px, camera->cx_px, camera->cy_px, camera->dist);
+    if (c != SFD_OK) return c;
+    const sfd_status_t t = sfd_chi2_table_init(&det->chi2, params->false_alarm_rate);
+    if (t != SFD_OK) return t;
+    det->params = *params;
+    det->camera = cam;
+    det->head = 0;
+    det->count = 0;
+    det->hash_cur = 0;
+    for (int s = 0; s < kSlots; ++s) {
+        det->hash[0][s] = -1;
+        det->hash[1][s] = -1;
+    }
+    det->magic_ = kMagic;
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_parity_reset(sfd_parity_t *det) {
+    if (det == nullptr) return SFD_ERR_INVAL;
+    if (det->magic_ != kMagic) return SFD_ERR_STATE;
+    det->count = 0;
+    det->head = 0;
+    for (int s = 0; s < kSlots; ++s) det->hash[det->hash_cur][s] = -1;
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
+                                              const sfd_frame_motion_t *motion,
+                                              sfd_verdict_t *out) {
+    if (det == nullptr || frame == nullptr || out == nullptr) return SFD_ERR_INVAL;
+    if (det->magic_ != kMagic) return SFD_ERR_STATE;
+    if (frame->num_features < 0 || frame->num_features > SFD_MAX_FEATURES) {
+        return SFD_ERR_CAPACITY;
+    }
+    const int L = det->params.window_frames;
+    if (det->count > 0) {
+        if (frame->utime <= det->frames[det->head].utime) return SFD_ERR_ORDER;
+        if (motion == nullptr) return SFD_ERR_INVAL;
+        if (!is_rotation(Eigen::Map<const Mat3>(motion->R_CcurToCprev), 1e-6)) {
+            return SFD_ERR_INVAL;
+        }
+        if (motion->translation_known != 0 && motion->translation_known != 1) return SFD_ERR_INVAL;
+        if (motion->translation_known && !all_finite(motion->p_CcurInCprev_m, 3)) {
+            return SFD_ERR_INVAL;
+        }
+    }
+    out->utime = frame->utime;
+    out->flags = 0;
+    out->num_features = frame->num_features;
+    out->num_consistent = out->num_spurious = out->num_untested = 0;
+    out->groups_tested = out->groups_failed = 0;
+
+    const int slot = (det->count == 0) ? 0 : (det->head + 1) % L;
+    ingest(det, frame, motion, slot, out);
+    det->head = slot;
+    if (det->count < L) det->count++;
+
+    if (det->count < L) {
+        out->flags |= SFD_FLAG_WINDOW_FILLING;
+    } else {
+        Window w;
+        if (!build_window(*det, &w)) {
+            for (int i = 0; i < frame->num_features; ++i) {
+                if (out->features[i].reason != SFD_REASON_BAD_INPUT) {
+                    out->features[i].reason = SFD_REASON_NUMERIC;
+                }
+            }
+        } else {
+            if (w.wb.rank < 3) out->flags |= SFD_FLAG_RANK_DEFICIENT;
+            // Work lists live in a static-size struct on the stack (1.8 KiB at 256 features).
+            Lists lists{};  // zeroed: ~1.8 KiB per frame, keeps every entry defined
+            const sfd_parity_frame_t &nf = det->frames[slot];
+            uint32_t key[SFD_MAX_FEATURES];
+            for (int i = 0; i < nf.num; ++i) {
+                lists.suspect[i] = 0;
+                lists.group_stat[i] = 0.0f;
+                if (nf.obs[i].valid && nf.obs[i].run >= L) {
+                    lists.testable[lists.n_testable++] = static_cast<int16_t>(i);
+                    key[i] = morton_key(nf.obs[i].uv_px);
+                }
+            }
+            const SortView view{key, nf.obs};
+            heap_sort(lists.testable, lists.n_testable, view);
+            test_groups(det, w, &lists, out);
+            const int n = det->params.group_size;
+            const int grouped = (lists.n_testable / n) * n;
+            // Candidates for isolation: suspects of failing groups, then the leftovers.
+            int16_t cand[SFD_MAX_FEATURES];
+            int n_cand = 0;
+            for (int a = 0; a < grouped; ++a) {
+                if (lists.suspect[lists.testable[a]] == 1) cand[n_cand++] = lists.testable[a];
+            }
+            for (int a = grouped; a < lists.n_testable; ++a) {
+                const int i = lists.testable[a];
+                out->features[i].reason = SFD_REASON_NO_GROUP;
+                if (det->params.parity_isolation) cand[n_cand++] = static_cast<int16_t>(i);
+            }
+            if (det->params.parity_isolation && n_cand > 0) {
+                isolate_with_references(det, w, &lists, cand, n_cand, out);
+                if (out->flags & SFD_FLAG_NO_REFERENCE) {
+                    // No consistent reference anywhere: peel each failing group on its own.
+                    const int G = lists.n_testable / n;
+                    for (int g = 0; g < G; ++g) {
+                        int members[kMaxN];
+                        if (lists.suspect[lists.testable[g]] != 1) continue;
+                        for (int k = 0; k < n; ++k) members[k] = lists.testable[g + k * G];
+                        isolate_within_group(det, w, members, n, out);
+                    }
+                }
+            }
+        }
+    }
+    for (int i = 0; i < frame->num_features; ++i) {
+        const int8_t s = out->features[i].status;
+        if (s == SFD_VERDICT_CONSISTENT) {
+            out->num_consistent++;
+        } else if (s == SFD_VERDICT_SPURIOUS) {
+            out->num_spurious++;
+        } else {
+            out->num_untested++;
+        }
+    }
+    return SFD_OK;
+}
