@@ -61,7 +61,7 @@ Point run_once(const IsolationOptions &opt, int isolation, double alpha) {
         mo.translation_known = 0;
         if (sfd_parity_push_frame(&g_det, &g_frame, &mo, &g_out) != SFD_OK) return {alpha, -1, -1};
         for (int k = 0; k < g_frame.num_features; ++k) {
-            const sfd_feature_verdict_t &v = g_out.features[k];
+            const sfd_feature_result_t &v = g_out.features[k];
             if (v.status == SFD_VERDICT_UNTESTED) continue;
             const int i = int(g_frame.features[k].track_id - 1000);
             const bool spurious = f - last_jump[size_t(i)] < p.window_frames - 1;

@@ -20,6 +20,7 @@
 #include <cstring>
 #include <vector>
 
+#include "flight_log.hpp"
 #include "paper_uav.hpp"
 #include "sfd/sfd.h"
 
@@ -39,32 +40,49 @@ struct Options {
     double outlier_ratio = 0.1;
     double jump_px = 8.0;
     const char *csv_dir = nullptr;
+    const char *out_log = nullptr;
+    double fault_magnitude = 0.02;
+    double depth_var = 0.0;
+    double pixel_noise = 1.0;
+    int truth_window = 2;
 };
 
 void usage(FILE *out) {
-    std::fprintf(out,
-                 "usage: sfd-sim SCENARIO [options]\n"
-                 "Scenarios:\n"
-                 "  paper-uav   Tornqvist et al. 2008 Section IV: helicopter at 58 m, downward\n"
-                 "              camera, features over 40x40 m; parity test Monte Carlo: P_fa and\n"
-                 "              P_d against the non-central chi-square, Figure 1 and ROC CSVs\n"
-                 "  isolation   sfd isolation vs the paper's discard-the-group rule at equal\n"
-                 "              detection probability, simulated flight with mistracks\n"
-                 "  uav-imu     gyro integration and IMU-predicted pixel motion over the paper's\n"
-                 "              flight (camera model + gyro integration check)\n"
-                 "Options:\n"
-                 "  --seed N            PRNG seed (default 1)\n"
-                 "  --windows N         paper-uav: Monte Carlo windows per case (10000)\n"
-                 "  --window-frames L   paper-uav: window length (2, the paper's)\n"
-                 "  --group-size n      paper-uav: group size (3)\n"
-                 "  --frames N          isolation / uav-imu: frames at 20 Hz (200)\n"
-                 "  --features N        isolation / uav-imu: features (240 / 200, max %d)\n"
-                 "  --outlier-ratio R   isolation: fraction of spurious features (0.1)\n"
-                 "  --jump-px P         isolation: mistrack jump (8 px)\n"
-                 "  --alpha A           uav-imu: false-alarm rate of the printed thresholds\n"
-                 "  --csv-dir DIR       write the scenario's CSV files into DIR\n"
-                 "Exit: 0 ok, 2 bad usage, 1 internal failure.\n",
-                 SFD_MAX_FEATURES);
+    std::fprintf(
+        out,
+        "usage: sfd-sim SCENARIO [options]          (a summary, no log)\n"
+        "       sfd-sim SCENARIO -o OUT.lcmlog [...] (a sensor log for sfd-replay/node)\n"
+        "Log scenarios (-o): IMU 200 Hz, CAMERA_INFO, FEATURES 20 Hz, TRUTH\n"
+        "  paper-uav      helicopter at 58 m over flat ground, fault k(-1,1) (normalized)\n"
+        "  mistracking    20 m altitude, tracks jumping by --jump-px\n"
+        "  moving-object  20 m altitude, 10%% of landmarks moving at 3 m/s, + mistracking\n"
+        "Summary scenarios:\n"
+        "  paper-uav   Tornqvist et al. 2008 Section IV: helicopter at 58 m, downward\n"
+        "              camera, features over 40x40 m; parity test Monte Carlo: P_fa and\n"
+        "              P_d against the non-central chi-square, Figure 1 and ROC CSVs\n"
+        "  isolation   sfd isolation vs the paper's discard-the-group rule at equal\n"
+        "              detection probability, simulated flight with mistracks\n"
+        "  uav-imu     gyro integration and IMU-predicted pixel motion over the paper's\n"
+        "              flight (camera model + gyro integration check)\n"
+        "Options:\n"
+        "  --seed N            PRNG seed (default 1)\n"
+        "  --windows N         paper-uav: Monte Carlo windows per case (10000)\n"
+        "  --window-frames L   paper-uav: window length (2, the paper's)\n"
+        "  --group-size n      paper-uav: group size (3)\n"
+        "  --frames N          isolation / uav-imu: frames at 20 Hz (200)\n"
+        "  --features N        isolation / uav-imu: features (240 / 200, max %d)\n"
+        "  --outlier-ratio R   isolation: fraction of spurious features (0.1)\n"
+        "  --jump-px P         isolation: mistrack jump (8 px)\n"
+        "  --alpha A           uav-imu: false-alarm rate of the printed thresholds\n"
+        "  --csv-dir DIR       write the scenario's CSV files into DIR\n"
+        "  -o OUT.lcmlog       write a sensor log (log scenarios above)\n"
+        "  --fault-magnitude K paper-uav log: k of k(-1,1) in normalized units (0.02)\n"
+        "  --depth-var V       depth prior variance written with the features (0 m^2)\n"
+        "  --pixel-noise S     pixel noise (1 px)\n"
+        "  --truth-window W    frames a mistracked track is labelled spurious: the\n"
+        "                      windows that mix the old and new point, L - 1 (2)\n"
+        "Exit: 0 ok, 2 bad usage, 1 internal failure.\n",
+        SFD_MAX_FEATURES);
 }
 
 bool parse_int(const char *s, long lo, long hi, long *out) {
@@ -311,6 +329,26 @@ int main(int argc, char **argv) {
                 return 2;
             }
             (ratio ? opt.outlier_ratio : opt.jump_px) = x;
+        } else if (!std::strcmp(a, "-o") && i + 1 < argc) {
+            opt.out_log = argv[++i];
+        } else if ((!std::strcmp(a, "--fault-magnitude") || !std::strcmp(a, "--depth-var") ||
+                    !std::strcmp(a, "--pixel-noise")) &&
+                   i + 1 < argc) {
+            char *end = nullptr;
+            const double x = std::strtod(argv[++i], &end);
+            if (*end != '\0' || !(x >= 0.0) || x > 1e4) {
+                std::fprintf(stderr, "sfd-sim: %s: out of range: %s\n", a, argv[i]);
+                return 2;
+            }
+            if (!std::strcmp(a, "--fault-magnitude")) opt.fault_magnitude = x;
+            if (!std::strcmp(a, "--depth-var")) opt.depth_var = x;
+            if (!std::strcmp(a, "--pixel-noise")) opt.pixel_noise = x;
+        } else if (!std::strcmp(a, "--truth-window") && i + 1 < argc) {
+            if (!parse_int(argv[++i], 1, 100, &v)) {
+                std::fprintf(stderr, "sfd-sim: --truth-window: expected 1..100, got %s\n", argv[i]);
+                return 2;
+            }
+            opt.truth_window = static_cast<int>(v);
         } else if (!std::strcmp(a, "--csv-dir") && i + 1 < argc) {
             opt.csv_dir = argv[++i];
         } else if (a[0] != '-' && opt.scenario == nullptr) {
@@ -325,6 +363,30 @@ int main(int argc, char **argv) {
         std::fprintf(stderr, "sfd-sim: missing SCENARIO\n");
         usage(stderr);
         return 2;
+    }
+    if (opt.out_log != nullptr) {
+        if (std::strcmp(opt.scenario, "paper-uav") != 0 &&
+            std::strcmp(opt.scenario, "mistracking") != 0 &&
+            std::strcmp(opt.scenario, "moving-object") != 0) {
+            std::fprintf(stderr,
+                         "sfd-sim: -o: scenario %s writes no log (paper-uav, mistracking, "
+                         "moving-object do)\n",
+                         opt.scenario);
+            return 2;
+        }
+        sfdsim::FlightOptions fo;
+        fo.scenario = opt.scenario;
+        fo.out_path = opt.out_log;
+        fo.seed = opt.seed;
+        fo.frames = opt.frames > 0 ? opt.frames : 400;
+        fo.features = opt.features > 0 ? opt.features : 200;
+        fo.outlier_ratio = opt.outlier_ratio;
+        fo.fault_magnitude = opt.fault_magnitude;
+        fo.jump_px = opt.jump_px;
+        fo.depth_var = opt.depth_var;
+        fo.pixel_noise_px = opt.pixel_noise;
+        fo.truth_window = opt.truth_window;
+        return sfdsim::write_flight_log(fo);
     }
     if (!std::strcmp(opt.scenario, "paper-uav")) {
         sfdsim::PaperOptions po;

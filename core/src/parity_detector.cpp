@@ -145,7 +145,7 @@ bool reduce(const sfd_parity_t &det, const Window &w, int i, FeatureReduced *out
     return reduce_feature(w.wb, fw, w.R_C0toCt, w.p_CtInC0, w.translation_known, out);
 }
 
-void set_verdict(sfd_feature_verdict_t *v, int8_t status, int8_t reason, int nu, double T,
+void set_verdict(sfd_feature_result_t *v, int8_t status, int8_t reason, int nu, double T,
                  double thr) {
     v->status = status;
     v->stage = SFD_STAGE_PARITY;
@@ -154,7 +154,7 @@ void set_verdict(sfd_feature_verdict_t *v, int8_t status, int8_t reason, int nu,
     v->statistic = (thr > 0.0) ? T / thr : 0.0;
 }
 
-void classify_fault(const GroupStats &gs, int j, int L, sfd_feature_verdict_t *v) {
+void classify_fault(const GroupStats &gs, int j, int L, sfd_feature_result_t *v) {
     if (L < 3) {
         v->fault_kind = SFD_FAULT_UNKNOWN;  // a jump and a drift look alike over two frames
         return;
@@ -212,7 +212,7 @@ __attribute__((noinline)) void test_groups(sfd_parity_t *det, const Window &w, L
             GroupStats sig;
             const bool have_sig = group_stats(ptr, n, d, w.translation_known, true, &sig);
             for (int k = 0; k < n; ++k) {
-                sfd_feature_verdict_t *v = &out->features[members[k]];
+                sfd_feature_result_t *v = &out->features[members[k]];
                 set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_GROUP_FAILED, gs.nu, gs.glr, thr);
                 if (have_sig) classify_fault(sig, k, w.L, v);
             }
@@ -267,7 +267,7 @@ __attribute__((noinline)) void isolate_with_references(sfd_parity_t *det, const 
     const int m = 1 + refs;
     for (int c = 0; c < n_candidates; ++c) {
         const int j = candidates[c];
-        sfd_feature_verdict_t *v = &out->features[j];
+        sfd_feature_result_t *v = &out->features[j];
         if (!reduce(*det, w, j, &fr[0])) {
             v->status = SFD_VERDICT_UNTESTED;
             v->stage = SFD_STAGE_NONE;
@@ -320,7 +320,7 @@ __attribute__((noinline)) void isolate_within_group(sfd_parity_t *det, const Win
         for (int k = 1; k < m; ++k) {
             if (gs.feature_glr[k] > gs.feature_glr[worst]) worst = k;
         }
-        sfd_feature_verdict_t *v = &out->features[members[worst]];
+        sfd_feature_result_t *v = &out->features[members[worst]];
         const int nu_j = gs.feature_dof[worst] > 0 ? gs.feature_dof[worst] : gs.nu;
         set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_ISOLATED, nu_j, gs.feature_glr[worst],
                     det->chi2.threshold[nu_j]);
@@ -394,7 +394,7 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
     for (int i = 0; i < frame->num_features; ++i) {
         const sfd_feature_t &f = frame->features[i];
         sfd_parity_obs_t &o = nf.obs[i];
-        sfd_feature_verdict_t &v = out->features[i];
+        sfd_feature_result_t &v = out->features[i];
         // Zero the padding too, so verdicts are byte-deterministic (IEEE 754 zero is all-bits-0).
         // cppcheck-suppress memsetClassFloat
         std::memset(&v, 0, sizeof v);

@@ -17,7 +17,7 @@ static void assert_verdicts_equal(const sfd_verdict_t *a, const sfd_verdict_t *b
     assert_int_equal(a->num_features, b->num_features);
     assert_memory_equal(a, b, offsetof(sfd_verdict_t, features));
     assert_memory_equal(a->features, b->features,
-                        sizeof(sfd_feature_verdict_t) * (size_t)a->num_features);
+                        sizeof(sfd_feature_result_t) * (size_t)a->num_features);
 }
 static sfd_frame_t g_frame;
 static sfd_verdict_t g_out, g_out2;
@@ -125,7 +125,7 @@ static void run_jumps(int known, int isolation, double *recall, double *kept, do
         for (int k = 0; k < g_frame.num_features; ++k) {
             const int i = (int)(g_frame.features[k].track_id - 1000);
             const int jumped = (i % 10) == (f % 7) % 10 && i >= f % 7;
-            const sfd_feature_verdict_t *v = &g_out.features[k];
+            const sfd_feature_result_t *v = &g_out.features[k];
             if (v->status == SFD_VERDICT_UNTESTED) continue;
             if (jumped) {
                 pos++;
@@ -182,7 +182,7 @@ static void run_moving(double speed_px, double *recall, double *drift_frac, doub
         assert_status(sfd_parity_push_frame(&g_det, &g_frame, &mo, &g_out), SFD_OK);
         for (int k = 0; k < g_frame.num_features; ++k) {
             const int i = (int)(g_frame.features[k].track_id - 1000);
-            const sfd_feature_verdict_t *v = &g_out.features[k];
+            const sfd_feature_result_t *v = &g_out.features[k];
             if (v->status == SFD_VERDICT_UNTESTED) continue;
             if (i % 17 == 0 && i < 170) {
                 pos++;

@@ -170,7 +170,8 @@ typedef struct {
     double p_CcurInCprev_m[3]; /**< current camera centre in the previous camera frame (m) */
 } sfd_frame_motion_t;
 
-/** Verdict on one input feature. */
+/** Verdict on one input feature (the LCM wire type of the same content is sfd_feature_verdict_t,
+ *  generated from lcm_types/feature_verdict_t.lcm). */
 typedef struct {
     int64_t track_id;
     int8_t status;     /**< SFD_VERDICT_* */
@@ -179,7 +180,7 @@ typedef struct {
     int8_t fault_kind; /**< SFD_FAULT_* (SPURIOUS only) */
     int16_t dof;       /**< dof of the deciding test */
     double statistic;  /**< deciding GLR / its threshold: > 1 rejects; 0 when untested */
-} sfd_feature_verdict_t;
+} sfd_feature_result_t;
 
 /** Verdict on one frame: every input feature, in input order. */
 typedef struct {
@@ -188,7 +189,7 @@ typedef struct {
     int32_t num_features;
     int32_t num_consistent, num_spurious, num_untested;
     int32_t groups_tested, groups_failed;
-    sfd_feature_verdict_t features[SFD_MAX_FEATURES];
+    sfd_feature_result_t features[SFD_MAX_FEATURES];
 } sfd_verdict_t;
 
 /** Window storage of one observation (plain data; fields are private to the detector). */

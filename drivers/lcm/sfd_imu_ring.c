@@ -1,0 +1,78 @@
+/* SPDX-License-Identifier: MIT */
+#include "sfd_imu_ring.h"
+
+#include <string.h>
+
+void sfd_imu_ring_init(sfd_imu_ring_t *ring) {
+    ring->head = 0;
+    ring->count = 0;
+    ring->overwritten = 0;
+}
+
+static const sfd_imu_sample_t *at(const sfd_imu_ring_t *ring, int32_t i) {
+    return &ring->samples[(ring->head + i) % SFD_IMU_RING_CAPACITY];
+}
+
+int64_t sfd_imu_ring_newest(const sfd_imu_ring_t *ring) {
+    return ring->count > 0 ? at(ring, ring->count - 1)->t_us : INT64_MIN;
+}
+
+int sfd_imu_ring_push(sfd_imu_ring_t *ring, const sfd_imu_sample_t *sample) {
+    if (ring->count > 0 && sample->t_us <= sfd_imu_ring_newest(ring)) return SFD_REJECT_ORDER;
+    int result = SFD_REJECT_NONE;
+    if (ring->count == SFD_IMU_RING_CAPACITY) {
+        ring->head = (ring->head + 1) % SFD_IMU_RING_CAPACITY;
+        ring->count--;
+        ring->overwritten++;
+        result = SFD_REJECT_IMU_OVERFLOW;
+    }
+    ring->samples[(ring->head + ring->count) % SFD_IMU_RING_CAPACITY] = *sample;
+    ring->count++;
+    return result;
+}
+
+int sfd_imu_ring_window(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us,
+                        sfd_imu_sample_t *out, int32_t cap, int32_t *n) {
+    if (ring->count == 0 || sfd_imu_ring_newest(ring) < t1_us) return SFD_REJECT_IMU_LATE;
+    if (at(ring, 0)->t_us > t0_us) return SFD_REJECT_IMU_GAP;
+    /* first: last sample at or before t0 (binary search over the time-ordered ring) */
+    int32_t lo = 0, hi = ring->count - 1;
+    while (lo < hi) { /* invariant: at(lo) <= t0; terminates in log2(capacity) steps */
+        const int32_t mid = lo + (hi - lo + 1) / 2;
+        if (at(ring, mid)->t_us <= t0_us) {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    const int32_t first = lo;
+    int32_t last = first;
+    while (last < ring->count - 1 && at(ring, last)->t_us < t1_us) ++last;
+    const int32_t count = last - first + 1;
+    if (count > cap) return SFD_REJECT_CAPACITY;
+    for (int32_t i = 0; i < count; ++i) out[i] = *at(ring, first + i);
+    *n = count;
+    return SFD_REJECT_NONE;
+}
+
+int sfd_assemble_motion(const sfd_imu_ring_t *ring, const sfd_extrinsics_t *ext,
+                        const double gyro_bias_rad_s[3], int64_t t_prev_us, int64_t t_cur_us,
+                        int64_t max_gap_us, sfd_imu_sample_t *scratch, sfd_frame_motion_t *motion) {
+    if (t_cur_us <= t_prev_us) return SFD_REJECT_ORDER;
+    int32_t n = 0;
+    const int w = sfd_imu_ring_window(ring, t_prev_us, t_cur_us, scratch, SFD_MAX_IMU_SAMPLES, &n);
+    if (w != SFD_REJECT_NONE) return w;
+    double q[4], R_I[9], R_C[9];
+    const sfd_status_t st =
+        sfd_gyro_integrate(scratch, (size_t)n, t_prev_us, t_cur_us, gyro_bias_rad_s, max_gap_us, q);
+    if (st == SFD_ERR_RANGE) return SFD_REJECT_IMU_GAP;
+    if (st != SFD_OK) return SFD_REJECT_CORE;
+    if (sfd_quat_to_rotmat(q, R_I) != SFD_OK ||
+        sfd_extrinsics_camera_rotation(ext, R_I, R_C) != SFD_OK) {
+        return SFD_REJECT_CORE;
+    }
+    memcpy(motion->R_CcurToCprev, R_C, sizeof R_C);
+    motion->translation_known = 0;
+    motion->p_CcurInCprev_m[0] = motion->p_CcurInCprev_m[1] = motion->p_CcurInCprev_m[2] = 0.0;
+    return SFD_REJECT_NONE;
+}

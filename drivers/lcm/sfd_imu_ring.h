@@ -1,0 +1,74 @@
+/* SPDX-License-Identifier: MIT */
+/**
+ * @file sfd_imu_ring.h
+ * @brief Fixed-capacity IMU ring buffer and frame-motion assembly (gyro integration between two
+ *        frame times, through the camera-IMU extrinsics). Caller-owned, heap-free, bounded.
+ */
+#ifndef SFD_IMU_RING_H
+#define SFD_IMU_RING_H
+
+#include <stdint.h>
+
+#include <sfd/sfd.h>
+
+#include "sfd_lcm_codec.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Samples kept: 2048 = 10.24 s at 200 Hz (56 B each, 112 KiB). */
+#ifndef SFD_IMU_RING_CAPACITY
+#define SFD_IMU_RING_CAPACITY 2048
+#endif
+
+typedef struct {
+    sfd_imu_sample_t samples[SFD_IMU_RING_CAPACITY];
+    int32_t head;        /* index of the oldest sample */
+    int32_t count;       /* samples held */
+    int64_t overwritten; /* samples dropped because the ring was full (oldest first) */
+} sfd_imu_ring_t;
+
+/** @brief Empties the ring. */
+void sfd_imu_ring_init(sfd_imu_ring_t *ring);
+
+/**
+ * @brief Appends a sample. When the ring is full the oldest sample is overwritten and counted in
+ *        `overwritten` (SFD_REJECT_IMU_OVERFLOW is returned so the caller can count it too; the
+ *        new sample is stored).
+ * @return SFD_REJECT_NONE; SFD_REJECT_ORDER if t_us is not after the newest sample (not stored);
+ *         SFD_REJECT_IMU_OVERFLOW as above.
+ */
+int sfd_imu_ring_push(sfd_imu_ring_t *ring, const sfd_imu_sample_t *sample);
+
+/** @brief Time of the newest sample, or INT64_MIN when empty. */
+int64_t sfd_imu_ring_newest(const sfd_imu_ring_t *ring);
+
+/**
+ * @brief Copies the samples that cover [t0_us, t1_us]: from the last sample at or before t0 to
+ *        the first at or after t1, into @p out (capacity @p cap).
+ * @return SFD_REJECT_NONE (*n set); SFD_REJECT_IMU_LATE when no sample at or after t1 has arrived
+ *         yet (wait, or give up after the configured time); SFD_REJECT_IMU_GAP when the ring
+ *         no longer (or never) held a sample at or before t0; SFD_REJECT_CAPACITY when more
+ *         than @p cap samples would be needed.
+ */
+int sfd_imu_ring_window(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us,
+                        sfd_imu_sample_t *out, int32_t cap, int32_t *n);
+
+/**
+ * @brief Camera motion between two frames for the detector: the IMU rotation integrated from the
+ *        gyro (bias subtracted, ends interpolated) over [t_prev_us, t_cur_us], expressed for the
+ *        camera through the extrinsics. Translation is left unknown.
+ * @param scratch  caller storage for SFD_MAX_IMU_SAMPLES samples.
+ * @return SFD_REJECT_NONE; the reasons of sfd_imu_ring_window(); SFD_REJECT_IMU_GAP also for a gap
+ *         between samples larger than @p max_gap_us inside the interval.
+ */
+int sfd_assemble_motion(const sfd_imu_ring_t *ring, const sfd_extrinsics_t *ext,
+                        const double gyro_bias_rad_s[3], int64_t t_prev_us, int64_t t_cur_us,
+                        int64_t max_gap_us, sfd_imu_sample_t *scratch, sfd_frame_motion_t *motion);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SFD_IMU_RING_H */

@@ -1,0 +1,85 @@
+/* SPDX-License-Identifier: MIT */
+#include "sfd_lcm_codec.h"
+
+#include <math.h>
+#include <string.h>
+
+static int all_finite(const double *v, int n) {
+    for (int i = 0; i < n; ++i) {
+        if (!isfinite(v[i])) return 0;
+    }
+    return 1;
+}
+
+const char *sfd_reject_reason_str(int reason) {
+    static const char *const names[SFD_REJECT_NUM_REASONS] = {
+        "decode",         "count",   "nonfinite", "order",        "camera_id", "depth",
+        "no_camera_info", "imu_gap", "imu_late",  "imu_overflow", "capacity",  "core"};
+    if (reason < 0 || reason >= SFD_REJECT_NUM_REASONS) return "unknown";
+    return names[reason];
+}
+
+int sfd_lcm_decode_imu(const void *data, int size, sfd_imu_sample_t *out) {
+    sfd_imu_t msg;
+    if (data == NULL || size < 0 || out == NULL) return SFD_REJECT_DECODE;
+    if (sfd_imu_t_decode(data, 0, size, &msg) < 0) return SFD_REJECT_DECODE;
+    if (!all_finite(msg.gyro, 3) || !all_finite(msg.accel, 3)) return SFD_REJECT_NONFINITE;
+    out->t_us = msg.utime;
+    memcpy(out->gyro_rad_s, msg.gyro, sizeof out->gyro_rad_s);
+    memcpy(out->accel_m_s2, msg.accel, sizeof out->accel_m_s2);
+    return SFD_REJECT_NONE;
+}
+
+int sfd_lcm_decode_camera_info(const void *data, int size, sfd_camera_info_t *msg,
+                               sfd_camera_t *camera, sfd_extrinsics_t *ext, int32_t *camera_id) {
+    if (data == NULL || size < 0 || msg == NULL || camera == NULL || ext == NULL ||
+        camera_id == NULL) {
+        return SFD_REJECT_DECODE;
+    }
+    if (sfd_camera_info_t_decode(data, 0, size, msg) < 0) return SFD_REJECT_DECODE;
+    sfd_camera_t cam;
+    sfd_extrinsics_t e;
+    if (sfd_camera_init(&cam, msg->distortion_model, msg->width, msg->height, msg->fx, msg->fy,
+                        msg->cx, msg->cy, msg->distortion) != SFD_OK ||
+        sfd_extrinsics_from_matrix(&e, msg->T_imu_cam) != SFD_OK) {
+        return SFD_REJECT_NONFINITE;
+    }
+    *camera = cam;
+    *ext = e;
+    *camera_id = msg->camera_id;
+    return SFD_REJECT_NONE;
+}
+
+int sfd_lcm_decode_features(const void *data, int size, sfd_feature_frame_t *msg,
+                            sfd_frame_t *frame, int32_t *camera_id, int *depth_fixed) {
+    if (data == NULL || size < 0 || msg == NULL || frame == NULL || camera_id == NULL ||
+        depth_fixed == NULL) {
+        return SFD_REJECT_DECODE;
+    }
+    if (sfd_feature_frame_t_decode(data, 0, size, msg) < 0) return SFD_REJECT_DECODE;
+    if (msg->num_features < 0 || msg->num_features > SFD_FEATURE_FRAME_T_CAPACITY) {
+        return SFD_REJECT_COUNT;
+    }
+    if (msg->num_features > SFD_MAX_FEATURES) return SFD_REJECT_CAPACITY;
+    int fixed = 0;
+    frame->utime = msg->utime;
+    frame->num_features = msg->num_features;
+    for (int i = 0; i < msg->num_features; ++i) {
+        sfd_feature_t *f = &frame->features[i];
+        f->track_id = msg->track_id[i];
+        f->u_px = msg->u[i];
+        f->v_px = msg->v[i];
+        f->depth_m = msg->depth[i];
+        f->depth_var_m2 = msg->depth_var[i];
+        const int usable =
+            isfinite(f->depth_m) && isfinite(f->depth_var_m2) && f->depth_var_m2 >= 0.0;
+        if (!usable) {
+            f->depth_m = 0.0; /* unknown: the configured default applies */
+            f->depth_var_m2 = 0.0;
+            ++fixed;
+        }
+    }
+    *camera_id = msg->camera_id;
+    *depth_fixed = fixed;
+    return SFD_REJECT_NONE;
+}

@@ -1,0 +1,81 @@
+/* SPDX-License-Identifier: MIT */
+/**
+ * @file sfd_lcm_codec.h
+ * @brief Decode and validation of sfd's LCM messages into core structs, malloc-free: the generated
+ *        fixed-capacity types decode into caller-owned storage, and every check happens here,
+ *        before the core sees anything (SPEC "LCM interface").
+ *
+ * Rejections carry a reason, numbered as timing_t's REJECT_* constants, so the node can count
+ * them and publish the counts on SFD_TIMING.
+ */
+#ifndef SFD_LCM_CODEC_H
+#define SFD_LCM_CODEC_H
+
+#include <stdint.h>
+
+#include <sfd/sfd.h>
+
+#include "sfd_camera_info_t.h"
+#include "sfd_feature_frame_t.h"
+#include "sfd_imu_t.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Rejection reasons (identical to sfd_timing_t's REJECT_* constants). */
+typedef enum {
+    SFD_REJECT_NONE = -1,
+    SFD_REJECT_DECODE = 0,    /**< the buffer does not decode (short, corrupt, wrong type) */
+    SFD_REJECT_COUNT = 1,     /**< num_features outside [0, wire capacity] */
+    SFD_REJECT_NONFINITE = 2, /**< NaN/Inf where a number is required */
+    SFD_REJECT_ORDER = 3,     /**< utime not after the channel's previous message */
+    SFD_REJECT_CAMERA_ID = 4, /**< camera_id unknown (no CAMERA_INFO for it) */
+    SFD_REJECT_DEPTH =
+        5, /**< depth prior unusable (counted; the feature is kept as "unknown depth") */
+    SFD_REJECT_NO_CAMERA_INFO = 6, /**< features before any calibration */
+    SFD_REJECT_IMU_GAP = 7,        /**< IMU does not cover the frame interval */
+    SFD_REJECT_IMU_LATE = 8,       /**< waited too long for IMU */
+    SFD_REJECT_IMU_OVERFLOW = 9,   /**< IMU ring buffer full */
+    SFD_REJECT_CAPACITY = 10,      /**< more features than the core's SFD_MAX_FEATURES */
+    SFD_REJECT_CORE = 11,          /**< the core refused the frame (status code) */
+    SFD_REJECT_NUM_REASONS = 12
+} sfd_reject_reason_t;
+
+/** Name of a rejection reason ("decode", "count", ...); "unknown" out of range. */
+const char *sfd_reject_reason_str(int reason);
+
+/**
+ * @brief Decodes an IMU message and validates it (finite values).
+ * @return SFD_REJECT_NONE on success (out filled), else the reason (out untouched).
+ */
+int sfd_lcm_decode_imu(const void *data, int size, sfd_imu_sample_t *out);
+
+/**
+ * @brief Decodes CAMERA_INFO into a validated camera model and extrinsics.
+ * @param msg  caller-owned scratch for the wire struct.
+ * @return SFD_REJECT_NONE on success; SFD_REJECT_DECODE; SFD_REJECT_NONFINITE for a calibration
+ *         the camera model or the extrinsics reject (non-finite, non-positive focal length,
+ *         unknown distortion model, non-rigid transform).
+ */
+int sfd_lcm_decode_camera_info(const void *data, int size, sfd_camera_info_t *msg,
+                               sfd_camera_t *camera, sfd_extrinsics_t *ext, int32_t *camera_id);
+
+/**
+ * @brief Decodes FEATURES into a core frame. Counts above the core capacity are rejected (the
+ *        core never sees a truncated frame); non-finite pixels are passed on (the core marks them
+ *        UNTESTED/BAD_INPUT so that the verdict still lists them); a depth prior that is
+ *        non-finite or has a negative/non-finite variance is replaced by "unknown" (depth 0),
+ *        and *depth_fixed counts how many were.
+ * @param msg  caller-owned scratch for the wire struct (41 KiB: keep it static).
+ * @return SFD_REJECT_NONE on success; SFD_REJECT_DECODE; SFD_REJECT_COUNT (negative or above the
+ *         wire capacity); SFD_REJECT_CAPACITY (above SFD_MAX_FEATURES).
+ */
+int sfd_lcm_decode_features(const void *data, int size, sfd_feature_frame_t *msg,
+                            sfd_frame_t *frame, int32_t *camera_id, int *depth_fixed);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SFD_LCM_CODEC_H */

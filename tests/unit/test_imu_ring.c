@@ -1,0 +1,143 @@
+/* SPDX-License-Identifier: MIT */
+/* unit.imu_ring: the drivers' fixed-capacity IMU ring buffer and frame-motion assembly. */
+#include "sfd_test.h"
+
+#include <string.h>
+
+#include "sfd_imu_ring.h"
+
+static sfd_imu_ring_t g_ring;
+static sfd_imu_sample_t g_scratch[SFD_MAX_IMU_SAMPLES];
+
+static sfd_imu_sample_t sample(int64_t t, double wx, double wy, double wz) {
+    sfd_imu_sample_t s;
+    memset(&s, 0, sizeof s);
+    s.t_us = t;
+    s.gyro_rad_s[0] = wx;
+    s.gyro_rad_s[1] = wy;
+    s.gyro_rad_s[2] = wz;
+    s.accel_m_s2[2] = 9.81;
+    return s;
+}
+
+/* GIVEN samples WHEN pushed out of order THEN ORDER and not stored; WHEN the ring is full THEN
+ * the oldest is overwritten, counted, and IMU_OVERFLOW returned while the new one is kept. */
+static void imu_ring_order_and_overflow(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-004");
+    sfd_imu_ring_init(&g_ring);
+    assert_true(sfd_imu_ring_newest(&g_ring) == INT64_MIN);
+    sfd_imu_sample_t s = sample(100, 0, 0, 0);
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE);
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_ORDER);
+    s.t_us = 50;
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_ORDER);
+    assert_int_equal(g_ring.count, 1);
+    for (int i = 1; i < SFD_IMU_RING_CAPACITY; ++i) {
+        s.t_us = 100 + 5000 * (int64_t)i;
+        assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE);
+    }
+    s.t_us += 5000;
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_IMU_OVERFLOW);
+    assert_int_equal(g_ring.count, SFD_IMU_RING_CAPACITY);
+    assert_true(g_ring.overwritten == 1);
+    assert_true(sfd_imu_ring_newest(&g_ring) == s.t_us);
+    int32_t n = 0;
+    /* the first sample (t = 100) is gone: an interval starting there is a gap */
+    assert_int_equal(sfd_imu_ring_window(&g_ring, 100, 20000, g_scratch, SFD_MAX_IMU_SAMPLES, &n),
+                     SFD_REJECT_IMU_GAP);
+    assert_int_equal(sfd_imu_ring_window(&g_ring, 5100, 20000, g_scratch, SFD_MAX_IMU_SAMPLES, &n),
+                     SFD_REJECT_NONE);
+}
+
+/* GIVEN 200 Hz samples WHEN asking for [t0, t1] THEN the copy starts at the last sample <= t0 and
+ * ends at the first >= t1; a t1 past the newest sample is LATE; too many samples is CAPACITY. */
+static void imu_ring_window_bounds(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-004");
+    sfd_imu_ring_init(&g_ring);
+    for (int i = 0; i < 100; ++i) {
+        sfd_imu_sample_t s = sample(1000000 + 5000 * (int64_t)i, 0.1, 0, 0);
+        sfd_imu_ring_push(&g_ring, &s);
+    }
+    int32_t n = 0;
+    assert_int_equal(sfd_imu_ring_window(&g_ring, 1012000, 1063000, g_scratch, 64, &n),
+                     SFD_REJECT_NONE);
+    assert_int_equal(n, 12);
+    assert_true(g_scratch[0].t_us == 1010000);
+    assert_true(g_scratch[n - 1].t_us == 1065000);
+    assert_int_equal(sfd_imu_ring_window(&g_ring, 1010000, 1065000, g_scratch, 64, &n),
+                     SFD_REJECT_NONE);
+    assert_int_equal(n, 12);
+    assert_int_equal(sfd_imu_ring_window(&g_ring, 1400000, 1495001, g_scratch, 64, &n),
+                     SFD_REJECT_IMU_LATE);
+    assert_int_equal(sfd_imu_ring_window(&g_ring, 999999, 1010000, g_scratch, 64, &n),
+                     SFD_REJECT_IMU_GAP);
+    assert_int_equal(sfd_imu_ring_window(&g_ring, 1000000, 1400000, g_scratch, 10, &n),
+                     SFD_REJECT_CAPACITY);
+}
+
+/* GIVEN a constant body rate and EuRoC's camera-IMU extrinsics WHEN assembling the motion between
+ * two frame times THEN R_CcurToCprev = R_CtoI^T exp(w dt) R_CtoI to 1e-12; a gap inside the
+ * interval larger than the limit is IMU_GAP. */
+static void imu_assemble_motion_matches_closed_form(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-005");
+    const double T[16] = {0.0148655429818,
+                          -0.999880929698,
+                          0.00414029679422,
+                          -0.0216401454975,
+                          0.999557249008,
+                          0.0149672133247,
+                          0.025715529948,
+                          -0.064676986768,
+                          -0.0257744366974,
+                          0.00375618835797,
+                          0.999660727178,
+                          0.00981073058949,
+                          0.0,
+                          0.0,
+                          0.0,
+                          1.0};
+    sfd_extrinsics_t ext;
+    assert_int_equal(sfd_extrinsics_from_matrix(&ext, T), SFD_OK);
+    const double w[3] = {0.3, -0.5, 0.8}, bias[3] = {0.01, 0.02, -0.03};
+    sfd_imu_ring_init(&g_ring);
+    for (int i = 0; i < 100; ++i) {
+        sfd_imu_sample_t s =
+            sample(5000 * (int64_t)i, w[0] + bias[0], w[1] + bias[1], w[2] + bias[2]);
+        sfd_imu_ring_push(&g_ring, &s);
+    }
+    sfd_frame_motion_t mo;
+    const int64_t t0 = 101234, t1 = 151234;
+    assert_int_equal(sfd_assemble_motion(&g_ring, &ext, bias, t0, t1, 20000, g_scratch, &mo),
+                     SFD_REJECT_NONE);
+    double phi[3], RI[9], expect[9];
+    for (int k = 0; k < 3; ++k) phi[k] = w[k] * (t1 - t0) * 1e-6;
+    sfd_so3_exp(phi, RI);
+    sfd_extrinsics_camera_rotation(&ext, RI, expect);
+    for (int k = 0; k < 9; ++k) assert_near(mo.R_CcurToCprev[k], expect[k], 1e-12);
+    assert_int_equal(mo.translation_known, 0);
+    /* a 30 ms hole inside the next interval */
+    sfd_imu_ring_init(&g_ring);
+    for (int i = 0; i < 100; ++i) {
+        if (i >= 30 && i < 36) continue;
+        sfd_imu_sample_t s = sample(5000 * (int64_t)i, 0, 0, 0.1);
+        sfd_imu_ring_push(&g_ring, &s);
+    }
+    assert_int_equal(
+        sfd_assemble_motion(&g_ring, &ext, bias, 140000, 190000, 20000, g_scratch, &mo),
+        SFD_REJECT_IMU_GAP);
+    assert_int_equal(
+        sfd_assemble_motion(&g_ring, &ext, bias, 190000, 140000, 20000, g_scratch, &mo),
+        SFD_REJECT_ORDER);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(imu_ring_order_and_overflow),
+        cmocka_unit_test(imu_ring_window_bounds),
+        cmocka_unit_test(imu_assemble_motion_matches_closed_form),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

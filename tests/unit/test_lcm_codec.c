@@ -1,0 +1,246 @@
+/* SPDX-License-Identifier: MIT */
+/* unit.lcm_codec: every sfd LCM type round-trips through the generated C code; the driver's
+ * decode rejects short, corrupt and out-of-range messages before the core sees them. */
+#include "sfd_test.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "sfd_camera_info_t.h"
+#include "sfd_feature_frame_t.h"
+#include "sfd_feature_verdict_t.h"
+#include "sfd_imu_t.h"
+#include "sfd_lcm_codec.h"
+#include "sfd_nav_state_t.h"
+#include "sfd_timing_t.h"
+#include "sfd_truth_t.h"
+
+enum { BUF = 64 * 1024 };
+static uint8_t g_buf[BUF];
+static sfd_feature_frame_t g_ff, g_ff2;
+static sfd_feature_verdict_t g_fv, g_fv2;
+static sfd_truth_t g_tr, g_tr2;
+static sfd_frame_t g_frame;
+
+#define ROUND_TRIP(type, a, b)                                           \
+    do {                                                                 \
+        const int n_ = type##_encoded_size(a);                           \
+        assert_true(n_ > 0 && n_ <= BUF);                                \
+        assert_int_equal(type##_encode(g_buf, 0, BUF, a), n_);           \
+        memset(b, 0x5a, sizeof *(b));                                    \
+        assert_int_equal(type##_decode(g_buf, 0, n_, b), n_);            \
+        assert_int_equal(type##_encode(g_buf + n_, 0, BUF - n_, b), n_); \
+        assert_memory_equal(g_buf, g_buf + n_, (size_t)n_);              \
+        for (int cut_ = 0; cut_ < n_; cut_ += (cut_ < 64 ? 1 : 97))      \
+            assert_true(type##_decode(g_buf, 0, cut_, b) < 0);           \
+        g_buf[0] ^= 0x01; /* fingerprint corrupted */                    \
+        assert_true(type##_decode(g_buf, 0, n_, b) < 0);                 \
+        g_buf[0] ^= 0x01;                                                \
+    } while (0)
+
+/* GIVEN a message of every type filled to capacity WHEN encoded and decoded THEN identical bytes
+ * after re-encoding; every truncation and a corrupted fingerprint fail to decode. */
+static void lcm_every_type_round_trips_at_max_size(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-001");
+    sfd_imu_t imu = {123, {0.1, -0.2, 0.3}, {0.0, 0.1, 9.81}}, imu2;
+    ROUND_TRIP(sfd_imu_t, &imu, &imu2);
+    sfd_camera_info_t ci, ci2;
+    memset(&ci, 0, sizeof ci);
+    ci.utime = 5;
+    ci.camera_id = 3;
+    ci.width = 752;
+    ci.height = 480;
+    ci.fx = 458.654;
+    ci.distortion_model = SFD_CAMERA_INFO_T_RADTAN;
+    ci.T_imu_cam[15] = 1.0;
+    ROUND_TRIP(sfd_camera_info_t, &ci, &ci2);
+    g_ff.utime = 77;
+    g_ff.num_features = SFD_FEATURE_FRAME_T_CAPACITY;
+    for (int i = 0; i < 512; ++i) {
+        g_ff.track_id[i] = (int64_t)i * 1000003;
+        g_ff.u[i] = i * 1.5;
+        g_ff.v[i] = -i;
+        g_ff.depth[i] = 10 + i;
+        g_ff.depth_var[i] = 0.5;
+    }
+    ROUND_TRIP(sfd_feature_frame_t, &g_ff, &g_ff2);
+    assert_int_equal(sfd_feature_frame_t_encoded_size(&g_ff), 8 + 8 + 4 + 4 + 512 * 40);
+    g_fv.num_features = 512;
+    for (int i = 0; i < 512; ++i) {
+        g_fv.track_id[i] = i;
+        g_fv.status[i] = (int8_t)(i % 3);
+        g_fv.statistic[i] = i * 0.01;
+        g_fv.stage[i] = SFD_FEATURE_VERDICT_T_PARITY;
+    }
+    ROUND_TRIP(sfd_feature_verdict_t, &g_fv, &g_fv2);
+    sfd_nav_state_t ns = {9, {1, 2, 3}, {4, 5, 6}, {1, 0, 0, 0}, {0.1, 0.2, 0.3}}, ns2;
+    ROUND_TRIP(sfd_nav_state_t, &ns, &ns2);
+    sfd_timing_t tm, tm2;
+    memset(&tm, 0, sizeof tm);
+    tm.utime = 10;
+    tm.total_us = 123;
+    for (int i = 0; i < SFD_TIMING_T_NUM_REASONS; ++i) tm.rejected[i] = (int64_t)i * 7;
+    ROUND_TRIP(sfd_timing_t, &tm, &tm2);
+    g_tr.num_features = 512;
+    for (int i = 0; i < 512; ++i) {
+        g_tr.track_id[i] = i;
+        g_tr.spurious[i] = (int8_t)(i % 2);
+    }
+    ROUND_TRIP(sfd_truth_t, &g_tr, &g_tr2);
+    /* the driver's reason numbers are the wire's */
+    assert_int_equal(SFD_REJECT_NUM_REASONS, SFD_TIMING_T_NUM_REASONS);
+    assert_int_equal(SFD_REJECT_CORE, SFD_TIMING_T_REJECT_CORE);
+    assert_int_equal(SFD_REJECT_IMU_GAP, SFD_TIMING_T_REJECT_IMU_GAP);
+    assert_string_equal(sfd_reject_reason_str(SFD_REJECT_COUNT), "count");
+    assert_string_equal(sfd_reject_reason_str(99), "unknown");
+}
+
+static int encode_ff(void) {
+    const int n = sfd_feature_frame_t_encode(g_buf, 0, BUF, &g_ff);
+    assert_true(n > 0);
+    return n;
+}
+
+/* GIVEN FEATURES messages WHEN the driver decodes them THEN valid ones fill the core frame;
+ * counts < 0 or > 512 are COUNT, > SFD_MAX_FEATURES CAPACITY, truncations DECODE; unusable depth
+ * priors become "unknown" and are counted; non-finite pixels pass to the core (which marks the
+ * feature UNTESTED, so the verdict still lists it). */
+static void lcm_features_decode_validates_before_core(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-002");
+    int32_t cam = -1;
+    int fixed = -1;
+    g_ff.utime = 1000;
+    g_ff.camera_id = 2;
+    g_ff.num_features = 3;
+    for (int i = 0; i < 3; ++i) {
+        g_ff.track_id[i] = 10 + i;
+        g_ff.u[i] = 100 + i;
+        g_ff.v[i] = 200 + i;
+        g_ff.depth[i] = 5.0;
+        g_ff.depth_var[i] = 1.0;
+    }
+    g_ff.depth[1] = NAN;
+    g_ff.depth_var[2] = -1.0;
+    g_ff.u[0] = INFINITY;
+    int n = encode_ff();
+    assert_int_equal(sfd_lcm_decode_features(g_buf, n, &g_ff2, &g_frame, &cam, &fixed),
+                     SFD_REJECT_NONE);
+    assert_int_equal(cam, 2);
+    assert_int_equal(fixed, 2);
+    assert_int_equal(g_frame.num_features, 3);
+    assert_true(g_frame.utime == 1000);
+    assert_true(g_frame.features[2].track_id == 12);
+    assert_near(g_frame.features[1].depth_m, 0.0, 0.0);
+    assert_near(g_frame.features[0].depth_m, 5.0, 0.0);
+    assert_true(isinf(g_frame.features[0].u_px));
+    for (int cut = 0; cut < n; cut += 61)
+        assert_int_equal(sfd_lcm_decode_features(g_buf, cut, &g_ff2, &g_frame, &cam, &fixed),
+                         SFD_REJECT_DECODE);
+    g_ff.num_features = -1;
+    n = encode_ff();
+    assert_int_equal(sfd_lcm_decode_features(g_buf, n, &g_ff2, &g_frame, &cam, &fixed),
+                     SFD_REJECT_COUNT);
+    g_ff.num_features = 513;
+    n = encode_ff();
+    assert_int_equal(sfd_lcm_decode_features(g_buf, n, &g_ff2, &g_frame, &cam, &fixed),
+                     SFD_REJECT_COUNT);
+    g_ff.num_features = SFD_MAX_FEATURES + 1;
+    n = encode_ff();
+    assert_int_equal(sfd_lcm_decode_features(g_buf, n, &g_ff2, &g_frame, &cam, &fixed),
+                     SFD_MAX_FEATURES + 1 <= 512 ? SFD_REJECT_CAPACITY : SFD_REJECT_COUNT);
+    assert_int_equal(sfd_lcm_decode_features(NULL, n, &g_ff2, &g_frame, &cam, &fixed),
+                     SFD_REJECT_DECODE);
+    /* another type's bytes on the FEATURES channel */
+    sfd_imu_t imu = {1, {0, 0, 0}, {0, 0, 0}};
+    n = sfd_imu_t_encode(g_buf, 0, BUF, &imu);
+    assert_int_equal(sfd_lcm_decode_features(g_buf, n, &g_ff2, &g_frame, &cam, &fixed),
+                     SFD_REJECT_DECODE);
+}
+
+/* GIVEN IMU and CAMERA_INFO messages WHEN decoded THEN valid ones fill core structs; non-finite
+ * IMU values and invalid calibrations (focal length 0, unknown model, non-rigid T) are rejected
+ * and leave the outputs untouched. */
+static void lcm_imu_and_camera_info_validated(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-003");
+    sfd_imu_t imu = {42, {0.1, 0.2, 0.3}, {0, 0, 9.8}};
+    int n = sfd_imu_t_encode(g_buf, 0, BUF, &imu);
+    sfd_imu_sample_t s;
+    memset(&s, 0, sizeof s);
+    assert_int_equal(sfd_lcm_decode_imu(g_buf, n, &s), SFD_REJECT_NONE);
+    assert_true(s.t_us == 42);
+    assert_near(s.gyro_rad_s[2], 0.3, 0.0);
+    imu.accel[1] = NAN;
+    n = sfd_imu_t_encode(g_buf, 0, BUF, &imu);
+    s.t_us = -5;
+    assert_int_equal(sfd_lcm_decode_imu(g_buf, n, &s), SFD_REJECT_NONFINITE);
+    assert_true(s.t_us == -5);
+    assert_int_equal(sfd_lcm_decode_imu(g_buf, 3, &s), SFD_REJECT_DECODE);
+
+    sfd_camera_info_t ci, scratch;
+    memset(&ci, 0, sizeof ci);
+    ci.camera_id = 0;
+    ci.width = 752;
+    ci.height = 480;
+    ci.fx = 458.654;
+    ci.fy = 457.296;
+    ci.cx = 367.215;
+    ci.cy = 248.375;
+    ci.distortion_model = SFD_CAMERA_INFO_T_RADTAN;
+    const double d[4] = {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05};
+    memcpy(ci.distortion, d, sizeof d);
+    const double T[16] = {0.0148655429818,
+                          -0.999880929698,
+                          0.00414029679422,
+                          -0.0216401454975,
+                          0.999557249008,
+                          0.0149672133247,
+                          0.025715529948,
+                          -0.064676986768,
+                          -0.0257744366974,
+                          0.00375618835797,
+                          0.999660727178,
+                          0.00981073058949,
+                          0.0,
+                          0.0,
+                          0.0,
+                          1.0};
+    memcpy(ci.T_imu_cam, T, sizeof T);
+    n = sfd_camera_info_t_encode(g_buf, 0, BUF, &ci);
+    sfd_camera_t cam;
+    sfd_extrinsics_t ext;
+    int32_t id = -1;
+    assert_int_equal(sfd_lcm_decode_camera_info(g_buf, n, &scratch, &cam, &ext, &id),
+                     SFD_REJECT_NONE);
+    assert_int_equal(id, 0);
+    assert_int_equal(cam.model, SFD_DISTORTION_RADTAN);
+    assert_near(ext.p_CinI[0], -0.0216401454975, 0.0);
+    sfd_camera_info_t bad = ci;
+    bad.fx = 0.0;
+    n = sfd_camera_info_t_encode(g_buf, 0, BUF, &bad);
+    id = 99;
+    assert_int_equal(sfd_lcm_decode_camera_info(g_buf, n, &scratch, &cam, &ext, &id),
+                     SFD_REJECT_NONFINITE);
+    assert_int_equal(id, 99);
+    bad = ci;
+    bad.distortion_model = 7;
+    n = sfd_camera_info_t_encode(g_buf, 0, BUF, &bad);
+    assert_int_equal(sfd_lcm_decode_camera_info(g_buf, n, &scratch, &cam, &ext, &id),
+                     SFD_REJECT_NONFINITE);
+    bad = ci;
+    bad.T_imu_cam[0] = 2.0;
+    n = sfd_camera_info_t_encode(g_buf, 0, BUF, &bad);
+    assert_int_equal(sfd_lcm_decode_camera_info(g_buf, n, &scratch, &cam, &ext, &id),
+                     SFD_REJECT_NONFINITE);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(lcm_every_type_round_trips_at_max_size),
+        cmocka_unit_test(lcm_features_decode_validates_before_core),
+        cmocka_unit_test(lcm_imu_and_camera_info_validated),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
