@@ -29,6 +29,7 @@
 #include "sfd_camera_info_t.h"
 #include "sfd_feature_frame_t.h"
 #include "sfd_imu_t.h"
+#include "sfd_sim_math.h"
 #include "sfd_truth_t.h"
 
 namespace sfdsim {
@@ -41,17 +42,6 @@ struct Pose {
     double R_BtoW[9];
     double p[3];
 };
-
-void mul3(const double *A, const double *B, double *C) {
-    double T[9];
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) {
-            double s = 0;
-            for (int k = 0; k < 3; ++k) s += A[3 * r + k] * B[3 * k + c];
-            T[3 * r + c] = s;
-        }
-    std::memcpy(C, T, sizeof T);
-}
 
 struct Trajectory {
     double altitude = 58.0;
@@ -66,8 +56,8 @@ struct Trajectory {
         sfd_so3_exp(ez, Ry);
         sfd_so3_exp(ey, Rp);
         sfd_so3_exp(ex, Rr);
-        mul3(Ry, Rp, T);
-        mul3(T, Rr, P.R_BtoW);
+        sfd_sim_mat3_mul(Ry, Rp, T);
+        sfd_sim_mat3_mul(T, Rr, P.R_BtoW);
         P.p[0] = speed * t;
         P.p[1] = 2.0 * std::sin(0.2 * t);
         P.p[2] = altitude + 0.5 * std::sin(0.3 * t);
@@ -170,7 +160,7 @@ int write_flight_log(const FlightOptions &opt) {
 
     auto camera_pose = [&](double t, double R_CtoW[9], double p_CinW[3]) {
         const Pose P = traj.at(t);
-        mul3(P.R_BtoW, R_CtoB, R_CtoW);
+        sfd_sim_mat3_mul(P.R_BtoW, R_CtoB, R_CtoW);
         for (int r = 0; r < 3; ++r) {
             p_CinW[r] = P.p[r];
             for (int k = 0; k < 3; ++k) p_CinW[r] += P.R_BtoW[3 * r + k] * p_CinB[k];

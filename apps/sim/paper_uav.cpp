@@ -21,92 +21,23 @@
 #include <vector>
 
 #include "sfd/sfd.h"
+#include "sfd_paper_sim.h"
 
 namespace sfdsim {
 namespace {
 
 constexpr double kSigma = 0.005;
 
-struct Truth {
-    double y[SFD_MAX_GROUP][SFD_MAX_WINDOW][2];
-    double z[SFD_MAX_GROUP][SFD_MAX_WINDOW];
-};
+using Truth = parity_truth_t;
 
-void mat3_mul(const double *A, const double *B, double *C) {
-    double T[9];
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) {
-            double s = 0;
-            for (int k = 0; k < 3; ++k) s += A[3 * r + k] * B[3 * k + c];
-            T[3 * r + c] = s;
-        }
-    std::memcpy(C, T, sizeof T);
-}
-
+// The scenario generator is shared with the unit tests (drivers/sim/sfd_paper_sim.h).
 void geometry(sfd_prng_t *rng, int L, int n, int known, sfd_parity_group_t *g, Truth *tr) {
-    std::memset(g, 0, sizeof *g);
-    g->window_frames = L;
-    g->group_size = n;
-    g->translation_known = known;
-    g->exact_depth_covariance = 1;
-    double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    double p[3] = {0, 0, 0};
-    for (int t = 0; t < L; ++t) {
-        if (t > 0) {
-            double phi[3], dR[9];
-            for (double &v : phi) v = 0.02 * sfd_prng_gaussian(rng);
-            sfd_so3_exp(phi, dR);
-            mat3_mul(dR, R, R);
-            const double v[3] = {1.0, 0.5, 0.1};
-            for (int k = 0; k < 3; ++k) p[k] += v[k] + 0.2 * sfd_prng_gaussian(rng);
-        }
-        std::memcpy(g->R_C0toCt[t], R, sizeof R);
-        std::memcpy(g->p_CtInC0_m[t], p, sizeof p);
-    }
-    for (int i = 0; i < n; ++i) {
-        const double m[3] = {-20.0 + 40.0 * sfd_prng_uniform(rng),
-                             -20.0 + 40.0 * sfd_prng_uniform(rng), 58.0 + sfd_prng_gaussian(rng)};
-        for (int t = 0; t < L; ++t) {
-            double c[3];
-            for (int r = 0; r < 3; ++r) {
-                c[r] = 0;
-                for (int k = 0; k < 3; ++k)
-                    c[r] += g->R_C0toCt[t][3 * r + k] * (m[k] - g->p_CtInC0_m[t][k]);
-            }
-            tr->z[i][t] = c[2];
-            tr->y[i][t][0] = c[0] / c[2];
-            tr->y[i][t][1] = c[1] / c[2];
-        }
-    }
+    sim_geometry(rng, g, tr, L, n, known, 0.02, 0);
 }
 
 void measure(sfd_prng_t *rng, const Truth &tr, double depth_var, double k, sfd_parity_group_t *g) {
-    const int L = g->window_frames;
-    for (int i = 0; i < g->group_size; ++i) {
-        for (int t = 0; t < L; ++t) {
-            for (int c = 0; c < 2; ++c) {
-                g->y[i][t][c] = tr.y[i][t][c] + kSigma * sfd_prng_gaussian(rng);
-                g->y_pred[i][t][c] = tr.y[i][t][c];
-            }
-            if (i == 0 && t == L - 1) {
-                g->y[i][t][0] += -k;
-                g->y[i][t][1] += k;
-            }
-            g->cov_y[i][t][0] = g->cov_y[i][t][2] = kSigma * kSigma;
-            g->cov_y[i][t][1] = 0.0;
-            double z = tr.z[i][t];
-            if (depth_var > 0.0) {
-                double zh = z;
-                for (int tries = 0; tries < 16; ++tries) {  // keep the prior positive
-                    zh = z + std::sqrt(depth_var) * sfd_prng_gaussian(rng);
-                    if (zh > 1.0) break;
-                }
-                z = std::max(zh, 1.0);
-            }
-            g->depth_m[i][t] = z;
-            g->depth_var_m2[i][t] = depth_var;
-        }
-    }
+    const double fault[2] = {-k, k};
+    sim_measure(rng, g, &tr, kSigma, depth_var, fault, 0);
 }
 
 FILE *open_csv(const std::string &dir, const char *name) {

@@ -16,6 +16,8 @@
 #include <sfd/sfd_prng.h>
 #include <sfd/sfd_rotation.h>
 
+#include "sfd_sim_math.h"
+
 enum { SCENE_MAX = SFD_MAX_FEATURES };
 
 typedef struct {
@@ -36,17 +38,6 @@ typedef struct {
     int respawn;                    /* 1: a landmark leaving the image is replaced (new track id) */
     int generation[SCENE_MAX];      /* respawn count per landmark slot */
 } scene_t;
-
-static inline void scene_mul(const double *A, const double *B, double *C) {
-    double T[9];
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) {
-            double s = 0;
-            for (int k = 0; k < 3; ++k) s += A[3 * r + k] * B[3 * k + c];
-            T[3 * r + c] = s;
-        }
-    memcpy(C, T, sizeof T);
-}
 
 /* Places landmark i at a random pixel of the current view, 30-50 m deep. */
 static inline void scene_place(scene_t *s, int i) {
@@ -85,7 +76,7 @@ static inline void scene_step(scene_t *s, sfd_frame_t *frame, sfd_frame_motion_t
         for (int k = 0; k < 3; ++k) phi[k] = s->rot_sigma * sfd_prng_gaussian(&s->rng);
         if (s->axis_only) phi[0] = phi[1] = 0.0;
         sfd_so3_exp(phi, dR);
-        scene_mul(dR, s->R_WtoC, R_new); /* R_WtoCnew = dR R_WtoCold, dR = R_ColdToCnew */
+        sfd_sim_mat3_mul(dR, s->R_WtoC, R_new); /* R_WtoCnew = dR R_WtoCold, dR = R_ColdToCnew */
         const double step[3] = {0.4 + 0.05 * sfd_prng_gaussian(&s->rng),
                                 0.2 + 0.05 * sfd_prng_gaussian(&s->rng),
                                 0.05 + 0.05 * sfd_prng_gaussian(&s->rng)};

@@ -12,55 +12,7 @@
 #include "sfd_node_core.h"
 #include "sfd_scene_sim.h"
 
-/* glibc's exported underlying allocator (the names are glibc's, hence reserved identifiers). */
-/* NOLINTBEGIN(bugprone-reserved-identifier,cert-dcl37-c,cert-dcl51-cpp) */
-extern void *__libc_malloc(size_t);
-extern void *__libc_calloc(size_t, size_t);
-extern void *__libc_realloc(void *, size_t);
-extern void __libc_free(void *);
-extern void *__libc_memalign(size_t, size_t);
-/* NOLINTEND(bugprone-reserved-identifier,cert-dcl37-c,cert-dcl51-cpp) */
-
-static volatile unsigned long g_heap_calls;
-
-void *malloc(size_t n) {
-    g_heap_calls++;
-    return __libc_malloc(n);
-}
-void *calloc(size_t a, size_t b) {
-    g_heap_calls++;
-    return __libc_calloc(a, b);
-}
-void *realloc(void *p, size_t n) {
-    g_heap_calls++;
-    return __libc_realloc(p, n);
-}
-void free(void *p) {
-    if (p != NULL) g_heap_calls++;
-    __libc_free(p);
-}
-void *memalign(size_t al, size_t n) {
-    g_heap_calls++;
-    return __libc_memalign(al, n);
-}
-void *aligned_alloc(size_t al, size_t n) {
-    g_heap_calls++;
-    return __libc_memalign(al, n);
-}
-int posix_memalign(void **out, size_t al, size_t n) {
-    g_heap_calls++;
-    *out = __libc_memalign(al, n);
-    return *out ? 0 : 12;
-}
-
-static int g_failures;
-#define CHECK(cond)                                            \
-    do {                                                       \
-        if (!(cond)) {                                         \
-            printf("FAILED: %s (line %d)\n", #cond, __LINE__); \
-            g_failures++;                                      \
-        }                                                      \
-    } while (0)
+#include "heap_counter.h"
 
 static long g_published;
 static void on_publish(void *ctx, sfd_node_output_t kind, const void *data, int32_t size,

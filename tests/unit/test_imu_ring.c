@@ -2,6 +2,8 @@
 /* unit.imu_ring: the drivers' fixed-capacity IMU ring buffer and frame-motion assembly. */
 #include "sfd_test.h"
 
+#include "euroc_calib.h"
+
 #include <string.h>
 
 #include "sfd_imu_ring.h"
@@ -83,22 +85,7 @@ static void imu_ring_window_bounds(void **state) {
 static void imu_assemble_motion_matches_closed_form(void **state) {
     (void)state;
     SFD_REQ("SFD-LCM-005");
-    const double T[16] = {0.0148655429818,
-                          -0.999880929698,
-                          0.00414029679422,
-                          -0.0216401454975,
-                          0.999557249008,
-                          0.0149672133247,
-                          0.025715529948,
-                          -0.064676986768,
-                          -0.0257744366974,
-                          0.00375618835797,
-                          0.999660727178,
-                          0.00981073058949,
-                          0.0,
-                          0.0,
-                          0.0,
-                          1.0};
+    const double *T = kEurocTimuCam;
     sfd_extrinsics_t ext;
     assert_int_equal(sfd_extrinsics_from_matrix(&ext, T), SFD_OK);
     const double w[3] = {0.3, -0.5, 0.8}, bias[3] = {0.01, 0.02, -0.03};

@@ -3,6 +3,8 @@
  * decode rejects short, corrupt and out-of-range messages before the core sees them. */
 #include "sfd_test.h"
 
+#include "euroc_calib.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -191,23 +193,8 @@ static void lcm_imu_and_camera_info_validated(void **state) {
     ci.distortion_model = SFD_CAMERA_INFO_T_RADTAN;
     const double d[4] = {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05};
     memcpy(ci.distortion, d, sizeof d);
-    const double T[16] = {0.0148655429818,
-                          -0.999880929698,
-                          0.00414029679422,
-                          -0.0216401454975,
-                          0.999557249008,
-                          0.0149672133247,
-                          0.025715529948,
-                          -0.064676986768,
-                          -0.0257744366974,
-                          0.00375618835797,
-                          0.999660727178,
-                          0.00981073058949,
-                          0.0,
-                          0.0,
-                          0.0,
-                          1.0};
-    memcpy(ci.T_imu_cam, T, sizeof T);
+    const double *T = kEurocTimuCam;
+    memcpy(ci.T_imu_cam, T, sizeof ci.T_imu_cam);
     n = sfd_camera_info_t_encode(g_buf, 0, BUF, &ci);
     sfd_camera_t cam;
     sfd_extrinsics_t ext;

@@ -5,7 +5,7 @@
 
 #include <sfd/sfd_chi2.h>
 
-#include "parity_sim.h"
+#include "sfd_paper_sim.h"
 
 static const double kSigma = 0.005; /* paper, Section IV */
 

@@ -2,6 +2,8 @@
 /* unit.rotation: SO(3) exp/log, quaternions and extrinsics. */
 #include "sfd_test.h"
 
+#include "euroc_calib.h"
+
 #include <sfd/sfd_prng.h>
 #include <sfd/sfd_rotation.h>
 
@@ -137,22 +139,7 @@ static void rotation_bad_inputs_rejected(void **state) {
 static void extrinsics_euroc_parse_and_camera_rotation_consistent(void **state) {
     (void)state;
     SFD_REQ("SFD-ROT-004");
-    const double T[16] = {0.0148655429818,
-                          -0.999880929698,
-                          0.00414029679422,
-                          -0.0216401454975,
-                          0.999557249008,
-                          0.0149672133247,
-                          0.025715529948,
-                          -0.064676986768,
-                          -0.0257744366974,
-                          0.00375618835797,
-                          0.999660727178,
-                          0.00981073058949,
-                          0.0,
-                          0.0,
-                          0.0,
-                          1.0};
+    const double *T = kEurocTimuCam;
     sfd_extrinsics_t ext;
     assert_status(sfd_extrinsics_from_matrix(&ext, T), SFD_OK);
     assert_near(ext.R_CtoI[1], -0.999880929698, 0.0);

@@ -1,18 +1,22 @@
 /* SPDX-License-Identifier: MIT */
-/* Test helper: the paper's simulation scenario (Tornqvist et al. 2008, Section IV) for one group.
- * Frame 0 is the world frame: a downward camera at 58 m, features uniform over 40 x 40 m with
- * depth ~ N(58, 1), normalized-coordinate noise sigma = 0.005. Assumptions the paper leaves open
- * (the same as sfd-sim paper-uav): between frames the camera rotates by a random rotation vector
- * with N(0, 0.02^2) rad per axis and translates by (1, 0.5, 0.1) m + N(0, 0.2^2) m per axis; the
- * fault k(-1, 1)^T is added to one feature's measurement in the newest frame. */
+/* Synthetic feed (header-only C, heap-free) for tests and sfd-sim: the paper's simulation scenario
+ * (Tornqvist et al. 2008, Section IV) for one group. Frame 0 is the world frame: a downward camera
+ * at 58 m, features uniform over 40 x 40 m with depth ~ N(58, 1), normalized-coordinate noise sigma
+ * = 0.005. Assumptions the paper leaves open (the same as sfd-sim paper-uav): between frames the
+ * camera rotates by a random rotation vector with N(0, 0.02^2) rad per axis and translates by (1,
+ * 0.5, 0.1) m + N(0, 0.2^2) m per axis; the fault k(-1, 1)^T is added to one feature's measurement
+ * in the newest frame. */
 #ifndef SFD_PARITY_SIM_H
 #define SFD_PARITY_SIM_H
 
+#include <math.h>
 #include <string.h>
 
 #include <sfd/sfd_parity.h>
 #include <sfd/sfd_prng.h>
 #include <sfd/sfd_rotation.h>
+
+#include "sfd_sim_math.h"
 
 typedef struct {
     double m[SFD_MAX_GROUP][3]; /* landmarks in frame 0 (m) */
@@ -20,21 +24,10 @@ typedef struct {
     double z_true[SFD_MAX_GROUP][SFD_MAX_WINDOW];
 } parity_truth_t;
 
-static void sim_mat3_mul(const double *A, const double *B, double *C) {
-    double T[9];
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) {
-            double s = 0;
-            for (int k = 0; k < 3; ++k) s += A[3 * r + k] * B[3 * k + c];
-            T[3 * r + c] = s;
-        }
-    memcpy(C, T, sizeof T);
-}
-
 /* Geometry: rotations, translations and landmarks (no noise). rot_sigma scales the rotation
  * increments; axis_only != 0 makes every rotation about the optical axis (rank drop). */
-static void sim_geometry(sfd_prng_t *rng, sfd_parity_group_t *g, parity_truth_t *tr, int L, int n,
-                         int known, double rot_sigma, int axis_only) {
+static inline void sim_geometry(sfd_prng_t *rng, sfd_parity_group_t *g, parity_truth_t *tr, int L,
+                                int n, int known, double rot_sigma, int axis_only) {
     memset(g, 0, sizeof *g);
     g->window_frames = L;
     g->group_size = n;
@@ -48,7 +41,7 @@ static void sim_geometry(sfd_prng_t *rng, sfd_parity_group_t *g, parity_truth_t 
             for (int k = 0; k < 3; ++k) phi[k] = rot_sigma * sfd_prng_gaussian(rng);
             if (axis_only) phi[0] = phi[1] = 0.0;
             sfd_so3_exp(phi, dR);
-            sim_mat3_mul(dR, R, R); /* R_C0toCt = dR * R_C0toC(t-1) */
+            sfd_sim_mat3_mul(dR, R, R); /* R_C0toCt = dR * R_C0toC(t-1) */
             const double v[3] = {1.0, 0.5, 0.1};
             for (int k = 0; k < 3; ++k) p[k] += v[k] + 0.2 * sfd_prng_gaussian(rng);
         }
@@ -75,8 +68,9 @@ static void sim_geometry(sfd_prng_t *rng, sfd_parity_group_t *g, parity_truth_t 
 
 /* Measurements: y = y_true + N(0, sigma^2 I) (+ fault on feature 0, newest frame), zhat = z + N(0,
  * depth_var) (kept positive), y_pred = y_true (the exact form of eq. 22). */
-static void sim_measure(sfd_prng_t *rng, sfd_parity_group_t *g, const parity_truth_t *tr,
-                        double sigma, double depth_var, const double fault[2], int fault_feature) {
+static inline void sim_measure(sfd_prng_t *rng, sfd_parity_group_t *g, const parity_truth_t *tr,
+                               double sigma, double depth_var, const double fault[2],
+                               int fault_feature) {
     const int L = g->window_frames;
     for (int i = 0; i < g->group_size; ++i) {
         for (int t = 0; t < L; ++t) {
@@ -93,11 +87,12 @@ static void sim_measure(sfd_prng_t *rng, sfd_parity_group_t *g, const parity_tru
             g->cov_y[i][t][2] = sigma * sigma;
             double z = tr->z_true[i][t];
             if (depth_var > 0.0) {
-                double zh;
-                do {
+                double zh = z;
+                for (int tries = 0; tries < 16; ++tries) { /* keep the prior positive */
                     zh = z + sqrt(depth_var) * sfd_prng_gaussian(rng);
-                } while (zh <= 1.0);
-                z = zh;
+                    if (zh > 1.0) break;
+                }
+                z = zh > 1.0 ? zh : 1.0;
             }
             g->depth_m[i][t] = z;
             g->depth_var_m2[i][t] = depth_var;
