@@ -9,11 +9,27 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 bash tools/setup.sh
 cmake --preset host >/dev/null
-cmake --build --preset host -j "$(nproc 2>/dev/null || echo 2)" --target sfd-sim
+cmake --build --preset host -j "$(nproc 2>/dev/null || echo 2)" --target sfd-sim sfd-replay
 out="${SFD_OUT:-$root/out}"
 mkdir -p "$out"
 ./build/host/apps/sfd-sim paper-uav --csv-dir "$out" "$@"
 echo
 ./build/host/apps/sfd-sim isolation --csv-dir "$out"
+echo
+echo
+# A simulated flight as a log, replayed through the node's code path, per method.
+./build/host/apps/sfd-sim mistracking -o "$out/flight.lcmlog" --frames 400
+printf '\n%-8s %-10s %-8s %-8s %-12s %-16s\n' method precision recall F1 false-alarm "time/frame (us)"
+for m in none parity; do
+  ./build/host/apps/sfd-replay "$out/flight.lcmlog" --method "$m" -o "$out/flight_$m.out.lcmlog" \
+    --summary "$out/flight_$m.json" >/dev/null
+  .venv/bin/python - "$out/flight_$m.json" "$m" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1])); t = json.load(open(sys.argv[1] + '.timing.json'))
+m = s['methods'][sys.argv[2]]
+print('%-8s %-10.4f %-8.4f %-8.4f %-12.5f %-16.1f' % (sys.argv[2], m['precision'], m['recall'],
+      m['f1'], m['false_alarm_rate'], t['frame_us']['median']))
+PY
+done
 echo
 .venv/bin/python tools/plot_paper.py "$out"

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "sfd_app_config.hpp"
 #include "sfd_node_core.h"
 #include "sfd_truth_t.h"
 
@@ -68,7 +69,7 @@ void on_publish(void *ctx, sfd_node_output_t kind, const void *data, int32_t siz
 void usage(FILE *f) {
     std::fprintf(
         f,
-        "usage: sfd-replay IN.lcmlog [-o OUT.lcmlog] [--summary S.json] [--method M]\n"
+        "usage: sfd-replay IN.lcmlog [--config F] [-o OUT.lcmlog] [--summary S.json] [--method M]\n"
         "                  [--alpha A] [--window L] [--group n] [--pixel-sigma PX]\n"
         "                  [--depth-default M] [--no-isolation]\n"
         "  Plays IN through the node's code path as fast as possible.\n"
@@ -94,38 +95,32 @@ double parse_double(const char *flag, const char *s, double lo, double hi, bool 
 
 int main(int argc, char **argv) {
     const char *in_path = nullptr, *out_path = nullptr, *summary_path = nullptr;
-    sfd_node_config_t cfg;
-    sfd_params_default(&cfg.params);
-    cfg.camera_id = -1;
-    cfg.publish_timing = 1;
+    sfdapp::AppConfig app_cfg;
+    std::string err;
+    for (int i = 1; i + 1 < argc; ++i) {  // the config file first, flags override it
+        if (!std::strcmp(argv[i], "--config") &&
+            !sfdapp::load_config(argv[i + 1], &app_cfg, &err)) {
+            std::fprintf(stderr, "sfd-replay: %s\n", err.c_str());
+            return 2;
+        }
+    }
+    sfd_node_config_t &cfg = app_cfg.node;
     bool ok = true;
-    std::string method_name = "parity";
     for (int i = 1; i < argc && ok; ++i) {
         const char *a = argv[i];
         const bool has = i + 1 < argc;
         if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
             usage(stdout);
             return 0;
+        } else if (!std::strcmp(a, "--config") && has) {
+            ++i;
         } else if (!std::strcmp(a, "-o") && has) {
             out_path = argv[++i];
         } else if (!std::strcmp(a, "--summary") && has) {
             summary_path = argv[++i];
         } else if (!std::strcmp(a, "--method") && has) {
-            method_name = argv[++i];
-            if (method_name == "none") {
-                cfg.params.method = SFD_METHOD_NONE;
-            } else if (method_name == "parity") {
-                cfg.params.method = SFD_METHOD_PARITY;
-            } else if (method_name == "oprf" || method_name == "ransac1" ||
-                       method_name == "ransacf" || method_name == "both") {
-                std::fprintf(stderr,
-                             "sfd-replay: --method %s: not in this build yet (arrives "
-                             "with the EKF); available: none, parity\n",
-                             method_name.c_str());
-                return 2;
-            } else {
-                std::fprintf(stderr, "sfd-replay: --method: unknown method %s\n",
-                             method_name.c_str());
+            if (!sfdapp::set_method(argv[++i], &app_cfg, &err)) {
+                std::fprintf(stderr, "sfd-replay: --method: %s\n", err.c_str());
                 return 2;
             }
         } else if (!std::strcmp(a, "--alpha") && has) {
@@ -149,6 +144,13 @@ int main(int argc, char **argv) {
         }
     }
     if (!ok) return 2;
+    if (!sfdapp::validate(app_cfg, &err)) {
+        std::fprintf(stderr, "sfd-replay: %s\n", err.c_str());
+        return 2;
+    }
+    const std::string method_name = app_cfg.method;
+    g_app.verdict_channel = app_cfg.channels.verdict;
+    g_app.timing_channel = app_cfg.channels.timing;
     if (in_path == nullptr) {
         std::fprintf(stderr, "sfd-replay: missing IN.lcmlog\n");
         usage(stderr);
@@ -189,11 +191,11 @@ int main(int argc, char **argv) {
         g_app.current_timestamp = ev->timestamp;
         const std::string ch(ev->channel, size_t(ev->channellen));
         if (g_app.out != nullptr) write_event(g_app.out, ch, ev->timestamp, ev->data, ev->datalen);
-        if (ch == "IMU") {
+        if (ch == app_cfg.channels.imu) {
             sfd_node_handle(&g_node, SFD_NODE_IMU, ev->data, ev->datalen);
-        } else if (ch == "CAMERA_INFO") {
+        } else if (ch == app_cfg.channels.camera_info) {
             sfd_node_handle(&g_node, SFD_NODE_CAMERA_INFO, ev->data, ev->datalen);
-        } else if (ch == "FEATURES") {
+        } else if (ch == app_cfg.channels.features) {
             const auto t0 = std::chrono::steady_clock::now();
             sfd_node_handle(&g_node, SFD_NODE_FEATURES, ev->data, ev->datalen);
             const auto t1 = std::chrono::steady_clock::now();

@@ -1,0 +1,160 @@
+// SPDX-License-Identifier: MIT
+// sfd-node: the onboard process. Subscribes IMU, CAMERA_INFO and FEATURES on real LCM, runs the
+// node's message handling (drivers/lcm/sfd_node_core, the same code sfd-replay drives) and
+// publishes SFD_VERDICT and SFD_TIMING. Stops cleanly on SIGINT/SIGTERM and prints its counters.
+#include <lcm/lcm.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "sfd_app_config.hpp"
+#include "sfd_node_core.h"
+
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) {
+    g_stop = 1;
+}
+
+struct Node {
+    lcm_t *lcm = nullptr;
+    sfdapp::AppConfig cfg;
+    long publish_failures = 0;
+};
+
+Node g_app;
+sfd_node_t g_node;  // ~0.3 MiB: static, allocated at load time, not on the heap
+
+void on_publish(void *ctx, sfd_node_output_t kind, const void *data, int32_t size, int64_t) {
+    Node *app = static_cast<Node *>(ctx);
+    const std::string &ch =
+        kind == SFD_NODE_OUT_VERDICT ? app->cfg.channels.verdict : app->cfg.channels.timing;
+    if (lcm_publish(app->lcm, ch.c_str(), data, static_cast<unsigned int>(size)) != 0) {
+        ++app->publish_failures;
+    }
+}
+
+int64_t clock_us(void *) {
+    return std::chrono::duration_cast<std::chrono::microseconds>(
+               std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
+
+sfd_node_input_t g_kinds[3] = {SFD_NODE_IMU, SFD_NODE_CAMERA_INFO, SFD_NODE_FEATURES};
+
+void on_message(const lcm_recv_buf_t *rbuf, const char *, void *user) {
+    const sfd_node_input_t kind = *static_cast<const sfd_node_input_t *>(user);
+    sfd_node_handle(&g_node, kind, rbuf->data, static_cast<int32_t>(rbuf->data_size));
+}
+
+void usage(FILE *f) {
+    std::fprintf(
+        f,
+        "usage: sfd-node [--config F] [--lcm-url URL] [--method M]\n"
+        "                [--imu-channel C] [--camera-info-channel C]\n"
+        "                [--features-channel C] [--verdict-channel C] [--timing-channel C]\n"
+        "  Subscribes IMU, CAMERA_INFO, FEATURES; publishes SFD_VERDICT, SFD_TIMING.\n"
+        "  --config F    YAML configuration (apps/config/sfd.yaml documents every key)\n"
+        "  --lcm-url     LCM provider (default udpm://239.255.76.67:7667?ttl=0)\n"
+        "  --method M    none | parity\n"
+        "Stops on SIGINT/SIGTERM. Exit: 0 ok, 2 bad usage or configuration, 1 internal.\n");
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    sfdapp::AppConfig &cfg = g_app.cfg;
+    std::string err;
+    // The config file first, then the flags over it.
+    for (int i = 1; i + 1 < argc; ++i) {
+        if (!std::strcmp(argv[i], "--config")) {
+            if (!sfdapp::load_config(argv[i + 1], &cfg, &err)) {
+                std::fprintf(stderr, "sfd-node: %s\n", err.c_str());
+                return 2;
+            }
+        }
+    }
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const bool has = i + 1 < argc;
+        if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
+            usage(stdout);
+            return 0;
+        } else if (!std::strcmp(a, "--config") && has) {
+            ++i;
+        } else if (!std::strcmp(a, "--lcm-url") && has) {
+            cfg.lcm_url = argv[++i];
+        } else if (!std::strcmp(a, "--method") && has) {
+            if (!sfdapp::set_method(argv[++i], &cfg, &err)) {
+                std::fprintf(stderr, "sfd-node: --method: %s\n", err.c_str());
+                return 2;
+            }
+        } else if (!std::strcmp(a, "--imu-channel") && has) {
+            cfg.channels.imu = argv[++i];
+        } else if (!std::strcmp(a, "--camera-info-channel") && has) {
+            cfg.channels.camera_info = argv[++i];
+        } else if (!std::strcmp(a, "--features-channel") && has) {
+            cfg.channels.features = argv[++i];
+        } else if (!std::strcmp(a, "--verdict-channel") && has) {
+            cfg.channels.verdict = argv[++i];
+        } else if (!std::strcmp(a, "--timing-channel") && has) {
+            cfg.channels.timing = argv[++i];
+        } else {
+            std::fprintf(stderr, "sfd-node: unknown or incomplete option: %s\n", a);
+            usage(stderr);
+            return 2;
+        }
+    }
+    if (!sfdapp::validate(cfg, &err)) {
+        std::fprintf(stderr, "sfd-node: %s\n", err.c_str());
+        return 2;
+    }
+    if (sfd_node_init(&g_node, &cfg.node, on_publish, clock_us, &g_app) != SFD_OK) {
+        std::fprintf(stderr, "sfd-node: node initialization failed\n");
+        return 1;
+    }
+    g_app.lcm = lcm_create(cfg.lcm_url.c_str());
+    if (g_app.lcm == nullptr) {
+        std::fprintf(stderr, "sfd-node: --lcm-url %s: cannot create the LCM instance\n",
+                     cfg.lcm_url.c_str());
+        return 2;
+    }
+    lcm_subscribe(g_app.lcm, cfg.channels.imu.c_str(), on_message, &g_kinds[0]);
+    lcm_subscribe(g_app.lcm, cfg.channels.camera_info.c_str(), on_message, &g_kinds[1]);
+    lcm_subscribe(g_app.lcm, cfg.channels.features.c_str(), on_message, &g_kinds[2]);
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+    const double *b = cfg.node.params.gyro_bias_rad_s;
+    std::printf("sfd-node %d.%d: method %s, alpha %g, L %d, n %d, lcm %s\n", SFD_VERSION_MAJOR,
+                SFD_VERSION_MINOR, cfg.method.c_str(), cfg.node.params.false_alarm_rate,
+                cfg.node.params.window_frames, cfg.node.params.group_size, cfg.lcm_url.c_str());
+    std::printf("sfd-node: gyro bias from the configuration (not estimated): %g %g %g rad/s\n",
+                b[0], b[1], b[2]);
+    std::fflush(stdout);
+    while (!g_stop) {
+        if (lcm_handle_timeout(g_app.lcm, 100) < 0) {
+            if (g_stop) break;  // the signal interrupted the wait
+            std::fprintf(stderr, "sfd-node: lcm_handle_timeout failed\n");
+            break;
+        }
+    }
+    sfd_node_flush(&g_node);
+    const sfd_node_counters_t &c = g_node.counters;
+    std::printf(
+        "sfd-node: stopped: %lld frames in, %lld processed (%lld untested), %lld IMU, "
+        "%lld CAMERA_INFO, %ld publish failures\n",
+        static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_processed),
+        static_cast<long long>(c.frames_untested), static_cast<long long>(c.imu_in),
+        static_cast<long long>(c.camera_info_in), g_app.publish_failures);
+    std::printf("sfd-node: rejected:");
+    for (int k = 0; k < SFD_REJECT_NUM_REASONS; ++k) {
+        std::printf(" %s=%lld", sfd_reject_reason_str(k), static_cast<long long>(c.rejected[k]));
+    }
+    std::printf("\n");
+    lcm_destroy(g_app.lcm);
+    return g_stop ? 0 : 1;
+}
