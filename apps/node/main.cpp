@@ -2,6 +2,7 @@
 // sfd-node: the onboard process. Subscribes IMU, CAMERA_INFO and FEATURES on real LCM, runs the
 // node's message handling (drivers/lcm/sfd_node_core, the same code sfd-replay drives) and
 // publishes SFD_VERDICT and SFD_TIMING. Stops cleanly on SIGINT/SIGTERM and prints its counters.
+#include <dlfcn.h>
 #include <lcm/lcm.h>
 
 #include <chrono>
@@ -20,10 +21,21 @@ void on_signal(int) {
     g_stop = 1;
 }
 
+// Heap accounting when a counting allocator is preloaded (tests/integration/heapcount_preload):
+// heap calls inside sfd's per-frame path (sfd_node_handle minus the lcm_publish calls it makes)
+// versus inside the LCM library (receive, dispatch, publish). Without the preload: not measured.
+using HeapCountFn = unsigned long long (*)();
+
 struct Node {
     lcm_t *lcm = nullptr;
     sfdapp::AppConfig cfg;
     long publish_failures = 0;
+    HeapCountFn heap_count = nullptr;        // calling thread's count
+    HeapCountFn heap_count_total = nullptr;  // whole process (LCM's receive thread included)
+    unsigned long long heap_sfd = 0;         // inside sfd_node_handle, publishes excluded
+    unsigned long long heap_publish = 0;     // inside lcm_publish
+    unsigned long long messages = 0;
+    bool started = false;  // counting starts after the first message (start-up)
 };
 
 Node g_app;
@@ -33,9 +45,11 @@ void on_publish(void *ctx, sfd_node_output_t kind, const void *data, int32_t siz
     Node *app = static_cast<Node *>(ctx);
     const std::string &ch =
         kind == SFD_NODE_OUT_VERDICT ? app->cfg.channels.verdict : app->cfg.channels.timing;
+    const unsigned long long h0 = app->heap_count ? app->heap_count() : 0;
     if (lcm_publish(app->lcm, ch.c_str(), data, static_cast<unsigned int>(size)) != 0) {
         ++app->publish_failures;
     }
+    if (app->heap_count) app->heap_publish += app->heap_count() - h0;
 }
 
 int64_t clock_us(void *) {
@@ -48,7 +62,18 @@ sfd_node_input_t g_kinds[3] = {SFD_NODE_IMU, SFD_NODE_CAMERA_INFO, SFD_NODE_FEAT
 
 void on_message(const lcm_recv_buf_t *rbuf, const char *, void *user) {
     const sfd_node_input_t kind = *static_cast<const sfd_node_input_t *>(user);
+    if (g_app.heap_count == nullptr) {
+        sfd_node_handle(&g_node, kind, rbuf->data, static_cast<int32_t>(rbuf->data_size));
+        return;
+    }
+    const unsigned long long h0 = g_app.heap_count();
+    const unsigned long long p0 = g_app.heap_publish;
     sfd_node_handle(&g_node, kind, rbuf->data, static_cast<int32_t>(rbuf->data_size));
+    const unsigned long long in_handle = g_app.heap_count() - h0;
+    const unsigned long long in_publish = g_app.heap_publish - p0;
+    if (g_app.started) g_app.heap_sfd += in_handle - in_publish;
+    g_app.started = true;  // the first message is start-up
+    ++g_app.messages;
 }
 
 void usage(FILE *f) {
@@ -126,6 +151,10 @@ int main(int argc, char **argv) {
     lcm_subscribe(g_app.lcm, cfg.channels.imu.c_str(), on_message, &g_kinds[0]);
     lcm_subscribe(g_app.lcm, cfg.channels.camera_info.c_str(), on_message, &g_kinds[1]);
     lcm_subscribe(g_app.lcm, cfg.channels.features.c_str(), on_message, &g_kinds[2]);
+    g_app.heap_count = reinterpret_cast<HeapCountFn>(dlsym(RTLD_DEFAULT, "sfd_heapcount_thread"));
+    g_app.heap_count_total =
+        reinterpret_cast<HeapCountFn>(dlsym(RTLD_DEFAULT, "sfd_heapcount_get"));
+    if (g_app.heap_count_total == nullptr) g_app.heap_count = nullptr;
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     const double *b = cfg.node.params.gyro_bias_rad_s;
@@ -135,8 +164,15 @@ int main(int argc, char **argv) {
     std::printf("sfd-node: gyro bias from the configuration (not estimated): %g %g %g rad/s\n",
                 b[0], b[1], b[2]);
     std::fflush(stdout);
+    unsigned long long heap_lcm_total = 0;
     while (!g_stop) {
-        if (lcm_handle_timeout(g_app.lcm, 100) < 0) {
+        const unsigned long long h0 = g_app.heap_count ? g_app.heap_count_total() : 0;
+        const unsigned long long s0 = g_app.heap_sfd;
+        const int rc = lcm_handle_timeout(g_app.lcm, 100);
+        if (g_app.heap_count && g_app.started) {
+            heap_lcm_total += (g_app.heap_count_total() - h0) - (g_app.heap_sfd - s0);
+        }
+        if (rc < 0) {
             if (g_stop) break;  // the signal interrupted the wait
             std::fprintf(stderr, "sfd-node: lcm_handle_timeout failed\n");
             break;
@@ -155,6 +191,15 @@ int main(int argc, char **argv) {
         std::printf(" %s=%lld", sfd_reject_reason_str(k), static_cast<long long>(c.rejected[k]));
     }
     std::printf("\n");
+    if (g_app.heap_count) {
+        std::printf(
+            "sfd-node: heap calls after start-up: sfd per-frame path %llu; LCM library %llu "
+            "over %llu messages (%.2f per message, publishes included)\n",
+            g_app.heap_sfd, heap_lcm_total, g_app.messages,
+            g_app.messages ? double(heap_lcm_total) / double(g_app.messages) : 0.0);
+    } else {
+        std::printf("sfd-node: heap calls not measured (no counting allocator preloaded)\n");
+    }
     lcm_destroy(g_app.lcm);
     return g_stop ? 0 : 1;
 }

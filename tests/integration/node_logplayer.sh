@@ -4,13 +4,16 @@
 # (ttl=0) into a running sfd-node while Debian's lcm-logger records the bus. Then:
 #  - the node stops cleanly on SIGINT (exit 0);
 #  - the recording holds one SFD_VERDICT and one SFD_TIMING per FEATURES frame;
+#  - a log recorded by lcm-logger replays in sfd-replay;
 #  - every verdict is identical to the one sfd-replay computes from the same log (the node and the
 #    replay share one code path), read back through LCM's Python EventLog.
 # Everything runs inside a private network namespace (unshare -n) whose only interface is
 # loopback with a multicast route: no packet can leave the namespace.
-# usage: node_logplayer.sh BUILD_DIR PYTHON PYTHONPATH_FOR_TYPES
+#  - with a counting allocator preloaded (4th argument), the node's own per-frame path made 0 heap
+#    calls after start-up; the LCM library's calls per message are reported.
+# usage: node_logplayer.sh BUILD_DIR PYTHON PYTHONPATH_FOR_TYPES [HEAPCOUNT_PRELOAD_SO]
 set -euo pipefail
-build="$1"; py="$2"; pytypes="$3"
+build="$1"; py="$2"; pytypes="$3"; preload="${4:-}"
 if ! unshare -n true 2>/dev/null; then
   echo "node_logplayer: 'unshare -n' is not permitted here (needs root or user namespaces)" >&2
   exit 1
@@ -24,7 +27,7 @@ trap 'rm -rf "$tmp"' EXIT
 "$build/apps/sfd-sim" mistracking -o "$tmp/in.lcmlog" --frames 60 --seed 3 >/dev/null
 "$build/apps/sfd-replay" "$tmp/in.lcmlog" -o "$tmp/replay.lcmlog" >/dev/null
 
-export SFD_BUILD="$build" SFD_TMP="$tmp"
+export SFD_BUILD="$build" SFD_TMP="$tmp" SFD_PRELOAD="$preload"
 unshare -n bash -euo pipefail <<'NS'
 ip link set lo up
 ip link set lo multicast on
@@ -32,7 +35,11 @@ ip route add 224.0.0.0/4 dev lo
 url="udpm://239.255.76.67:7667?ttl=0"
 lcm-logger -q -f --lcm-url="$url" "$SFD_TMP/recorded.lcmlog" &
 logger=$!
-"$SFD_BUILD/apps/sfd-node" --lcm-url "$url" > "$SFD_TMP/node.txt" 2>&1 &
+if [ -n "$SFD_PRELOAD" ]; then
+  LD_PRELOAD="$SFD_PRELOAD" "$SFD_BUILD/apps/sfd-node" --lcm-url "$url" > "$SFD_TMP/node.txt" 2>&1 &
+else
+  "$SFD_BUILD/apps/sfd-node" --lcm-url "$url" > "$SFD_TMP/node.txt" 2>&1 &
+fi
 node=$!
 sleep 1
 lcm-logplayer --lcm-url="$url" -s 2.0 "$SFD_TMP/in.lcmlog" >/dev/null
@@ -42,6 +49,10 @@ rc=0; wait "$node" || rc=$?
 kill -INT "$logger"; wait "$logger" || true
 cat "$SFD_TMP/node.txt"
 [ "$rc" -eq 0 ] || { echo "sfd-node exited $rc on SIGINT"; exit 1; }
+if [ -n "$SFD_PRELOAD" ]; then
+  grep -q "heap calls after start-up: sfd per-frame path 0;" "$SFD_TMP/node.txt" || {
+    echo "sfd-node's per-frame path allocated (see the heap line above)"; exit 1; }
+fi
 NS
 
 PYTHONPATH="$pytypes" "$py" - "$tmp/recorded.lcmlog" "$tmp/replay.lcmlog" <<'PYEOF'
@@ -70,3 +81,10 @@ for utime in rep:
     spurious += sum(1 for s in rep[utime][1] if s == 2)
 print('node verdicts identical to sfd-replay for all 60 frames (%d SPURIOUS)' % spurious)
 PYEOF
+
+# A log recorded by lcm-logger replays in sfd-replay (the recording also holds the node's own
+# outputs and LCM_SELF_TEST: they are copied, not interpreted).
+"$build/apps/sfd-replay" "$tmp/recorded.lcmlog" --summary "$tmp/rec.json" > "$tmp/rec.txt"
+grep -q '"processed": 60' "$tmp/rec.json" || {
+  cat "$tmp/rec.txt"; echo "sfd-replay could not replay lcm-logger's recording"; exit 1; }
+echo "sfd-replay replayed lcm-logger's recording: $(sed -n 2p "$tmp/rec.txt")"
