@@ -147,6 +147,7 @@ namespace {
 __attribute__((noinline)) bool schur_statistic(const FeatureReduced *const *f, const int *idx,
                                                int m, int d, double *T, double (*x_out)[kMaxD],
                                                double (*Ainv_out)[kMaxD][kMaxD]) {
+    if (m < 1 || m > kMaxN || d < 1 || d > kMaxD) return false;  // sizes are the callers' bounds
     double A[kMaxD][kMaxD] = {};
     double b[kMaxD] = {};
     for (int a = 0; a < m; ++a) {
@@ -180,6 +181,33 @@ __attribute__((noinline)) bool schur_statistic(const FeatureReduced *const *f, c
     }
     if (Ainv_out != nullptr) la::chol_inverse(LA, d, *Ainv_out);
     return std::isfinite(*T);
+}
+
+// Block j of the projected precision (the residual's information about feature j's reduced
+// measurements once the landmarks, and for unknown translation the common component, are
+// eliminated): M_jj = C_j^{-1} (known translation, Ainv = nullptr) or
+// C_j^{-1} - C_j^{-1} A^{-1} C_j^{-1} with A = sum_i C_i^{-1} (unknown).
+void precision_block(const FeatureReduced &fj, const double (*Ainv)[kMaxD], int d,
+                     double (*M)[kMaxD]) {
+    for (int k = 0; k < d; ++k) {
+        for (int l = 0; l < d; ++l) M[k][l] = fj.Cinv[k][l];
+    }
+    if (Ainv == nullptr) return;
+    double T1[kMaxD][kMaxD];
+    for (int k = 0; k < d; ++k) {
+        for (int l = 0; l < d; ++l) {
+            double acc = 0.0;
+            for (int m = 0; m < d; ++m) acc += Ainv[k][m] * fj.Cinv[m][l];
+            T1[k][l] = acc;
+        }
+    }
+    for (int k = 0; k < d; ++k) {
+        for (int l = 0; l < d; ++l) {
+            double acc = 0.0;
+            for (int m = 0; m < d; ++m) acc += fj.Cinv[k][m] * T1[m][l];
+            M[k][l] -= acc;
+        }
+    }
 }
 
 // GLR of a fault e_j (x) Phi f: g^T G^+ g with g = Phi^T s_j, G = Phi^T M_jj Phi.
@@ -254,28 +282,7 @@ bool group_stats(const FeatureReduced *const *f, int n, int d, bool translation_
             for (int l = 0; l < d; ++l) acc += fr.Cinv[k][l] * (fr.r[l] - out->x[l]);
             s[k] = acc;
         }
-        if (translation_known) {
-            for (int k = 0; k < d; ++k) {
-                for (int l = 0; l < d; ++l) M[k][l] = fr.Cinv[k][l];
-            }
-        } else {
-            // M_jj = C_j^{-1} - C_j^{-1} A^{-1} C_j^{-1}
-            double T1[kMaxD][kMaxD];
-            for (int k = 0; k < d; ++k) {
-                for (int l = 0; l < d; ++l) {
-                    double acc = 0.0;
-                    for (int m = 0; m < d; ++m) acc += Ainv[k][m] * fr.Cinv[m][l];
-                    T1[k][l] = acc;
-                }
-            }
-            for (int k = 0; k < d; ++k) {
-                for (int l = 0; l < d; ++l) {
-                    double acc = 0.0;
-                    for (int m = 0; m < d; ++m) acc += fr.Cinv[k][m] * T1[m][l];
-                    M[k][l] = fr.Cinv[k][l] - acc;
-                }
-            }
-        }
+        precision_block(fr, translation_known ? nullptr : Ainv, d, M);
         out->jump_glr[j] = signature_glr(fr.phi_jump, s, M, d, &out->jump_dof[j]);
         out->drift_glr[j] = signature_glr(fr.phi_drift, s, M, d, &out->drift_dof[j]);
     }
@@ -341,7 +348,10 @@ void load_feature(const sfd_parity_group_t *g, int i, FeatureWindow *fw) {
 }
 
 // Basis + reduced features of a validated group. Returns an sfd status.
+// Validated group -> basis and reduced features (the common start of the C entry points).
 sfd_status_t prepare(const sfd_parity_group_t *g, WindowBasis *wb, FeatureReduced *fr) {
+    const sfd_status_t v = validate_group(g);
+    if (v != SFD_OK) return v;
     if (!window_basis(g->R_C0toCt, g->window_frames, wb)) return SFD_ERR_NUMERIC;
     for (int i = 0; i < g->group_size; ++i) {
         FeatureWindow fw{};
@@ -359,8 +369,6 @@ sfd_status_t prepare(const sfd_parity_group_t *g, WindowBasis *wb, FeatureReduce
 extern "C" sfd_status_t sfd_parity_test_group(const sfd_parity_group_t *group,
                                               sfd_parity_result_t *result) {
     if (result == nullptr) return SFD_ERR_INVAL;
-    const sfd_status_t v = validate_group(group);
-    if (v != SFD_OK) return v;
     WindowBasis wb;
     FeatureReduced fr[kMaxN];
     const sfd_status_t p = prepare(group, &wb, fr);
@@ -429,10 +437,8 @@ extern "C" sfd_status_t sfd_parity_test_group(const sfd_parity_group_t *group,
 extern "C" sfd_status_t sfd_parity_noncentrality(const sfd_parity_group_t *group, int32_t feature,
                                                  int32_t frame, const double fault[2],
                                                  double *lambda) {
-    if (lambda == nullptr || fault == nullptr || !all_finite(fault, 2)) return SFD_ERR_INVAL;
-    const sfd_status_t v = validate_group(group);
-    if (v != SFD_OK) return v;
-    if (feature < 0 || feature >= group->group_size || frame < 0 || frame >= group->window_frames) {
+    if (lambda == nullptr || fault == nullptr || !all_finite(fault, 2) || group == nullptr ||
+        feature < 0 || feature >= group->group_size || frame < 0 || frame >= group->window_frames) {
         return SFD_ERR_INVAL;
     }
     WindowBasis wb;
@@ -448,34 +454,28 @@ extern "C" sfd_status_t sfd_parity_noncentrality(const sfd_parity_group_t *group
         const std::ptrdiff_t row = 2 * static_cast<std::ptrdiff_t>(frame);
         dr[k] = zhat * (wb.B[row][k] * fault[0] + wb.B[row + 1][k] * fault[1]);
     }
-    const FeatureReduced &fj = fr[feature];
+    // lambda = dr^T M_jj dr (eq. 16 with the projected precision of the faulty feature).
+    const bool known = group->translation_known != 0;
+    if (!known && n < 2) {
+        *lambda = 0.0;  // a lone feature's fault is absorbed by the translation
+        return SFD_OK;
+    }
+    double Ainv[kMaxD][kMaxD] = {};
+    if (!known) {
+        const FeatureReduced *ptr[kMaxN];
+        int all[kMaxN] = {};
+        for (int i = 0; i < n; ++i) {
+            ptr[i] = &fr[i];
+            all[i] = i;
+        }
+        double T = 0.0;
+        if (!schur_statistic(ptr, all, n, d, &T, nullptr, &Ainv)) return SFD_ERR_NUMERIC;
+    }
+    double M[kMaxD][kMaxD];
+    precision_block(fr[feature], known ? nullptr : Ainv, d, M);
     double out = 0.0;
     for (int k = 0; k < d; ++k) {
-        for (int l = 0; l < d; ++l) out += dr[k] * fj.Cinv[k][l] * dr[l];
-    }
-    if (!group->translation_known) {
-        if (n < 2) {
-            *lambda = 0.0;
-            return SFD_OK;
-        }
-        // Subtract (C_j^{-1} dr)^T A^{-1} (C_j^{-1} dr).
-        double A[kMaxD][kMaxD] = {};
-        for (int i = 0; i < n; ++i) {
-            for (int k = 0; k < d; ++k) {
-                for (int l = 0; l < d; ++l) A[k][l] += fr[i].Cinv[k][l];
-            }
-        }
-        double LA[kMaxD][kMaxD];
-        if (!la::cholesky(A, d, LA)) return SFD_ERR_NUMERIC;
-        double u[kMaxD] = {};
-        for (int k = 0; k < d; ++k) {
-            double acc = 0.0;
-            for (int l = 0; l < d; ++l) acc += fj.Cinv[k][l] * dr[l];
-            u[k] = acc;
-        }
-        double w[kMaxD];
-        la::forward_solve(LA, d, u, w);
-        for (int k = 0; k < d; ++k) out -= w[k] * w[k];
+        for (int l = 0; l < d; ++l) out += dr[k] * M[k][l] * dr[l];
     }
     *lambda = std::fmax(out, 0.0);
     return SFD_OK;
