@@ -21,6 +21,7 @@
 #include "sfd_params.h"
 #include "sfd_parity.h"
 #include "sfd_prng.h"
+#include "sfd_ransac.h"
 #include "sfd_rotation.h"
 #include "sfd_status.h"
 
