@@ -17,6 +17,7 @@
 #include "sfd_camera.h"
 #include "sfd_chi2.h"
 #include "sfd_config.h"
+#include "sfd_fundamental.h"
 #include "sfd_imu.h"
 #include "sfd_params.h"
 #include "sfd_parity.h"
