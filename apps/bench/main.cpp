@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// sfd-bench: side-by-side benchmarks. This build has the `parity` mode (issue 3); the OPRF and
-// OpenCV comparisons join it with issue 5.
+// sfd-bench: side-by-side benchmarks: `parity` (issue 3) and `assoc` (issue 5, sfd's association
+// methods against OpenCV's findFundamentalMat/findEssentialMat; assoc.cpp).
 //
 // sfd-bench links a core built with SFD_MAX_FEATURES = 512 (the wire capacity) so that it can run
 // N = 500; the per-frame cost depends on the features present, not on the capacity.
@@ -20,6 +20,8 @@
 
 #include "sfd/sfd.h"
 #include "sfd_scene_sim.h"
+
+int bench_assoc(int argc, char **argv);  // assoc.cpp
 
 namespace {
 
@@ -77,6 +79,8 @@ void usage(FILE *out) {
     std::fprintf(out,
                  "usage: sfd-bench parity [--frames N] [--seed S] [--csv FILE]\n"
                  "       sfd-bench parity --single N L n known [--frames F]\n"
+                 "       sfd-bench assoc [--trials T] [--seed S] [--csv FILE] [--quick]\n"
+                 "  assoc     sfd association methods against OpenCV (sfd-bench assoc --help)\n"
                  "  parity    per-frame time of the parity detector over the grid\n"
                  "            N {50,100,200,500} x L {2,3,5} x n {3,4} x {known, unknown}\n"
                  "  --single  one configuration (for callgrind: tools/bench_parity_callgrind.sh)\n"
@@ -92,8 +96,9 @@ int main(int argc, char **argv) {
         usage(argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;
     }
+    if (std::strcmp(argv[1], "assoc") == 0) return bench_assoc(argc, argv);
     if (std::strcmp(argv[1], "parity") != 0) {
-        std::fprintf(stderr, "sfd-bench: unknown mode: %s (available: parity)\n", argv[1]);
+        std::fprintf(stderr, "sfd-bench: unknown mode: %s (available: parity, assoc)\n", argv[1]);
         return 2;
     }
     int frames = 2000;

@@ -21,6 +21,8 @@
 #include "sfd_imu.h"
 #include "sfd_params.h"
 #include "sfd_parity.h"
+#include "sfd_assoc.h"
+#include "sfd_ekf.h"
 #include "sfd_prng.h"
 #include "sfd_ransac.h"
 #include "sfd_rotation.h"

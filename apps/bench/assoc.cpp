@@ -1,0 +1,242 @@
+// SPDX-License-Identifier: MIT
+// sfd-bench assoc: per-frame time and outlier precision/recall/F1 of sfd's association methods
+// (OPRF, 1-point RANSAC, fundamental-matrix RANSAC, none) against OpenCV's findFundamentalMat
+// (FM_RANSAC, FM_LMEDS, USAC_DEFAULT, USAC_FAST, USAC_ACCURATE, USAC_MAGSAC) and
+// findEssentialMat (RANSAC, USAC_MAGSAC) on the same correspondences (drivers/sim/sfd_pair_sim.h),
+// at OpenCV thresholds of 1 px and 3 px. An outlier is "detected" when sfd says SPURIOUS or
+// OpenCV's mask says 0.
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "sfd/sfd.h"
+#include "sfd_pair_sim.h"
+
+namespace {
+
+sim_pair_t g_pair;
+sim_pair_t g_work;
+sfd_assoc_t g_assoc;
+sfd_assoc_result_t g_res;
+
+struct Stats {
+    std::vector<double> us;
+    long tp = 0, fp = 0, fn = 0, tn = 0;
+    void add(double t_us, const std::vector<uint8_t> &flagged, const sim_pair_t &pr) {
+        us.push_back(t_us);
+        for (int i = 0; i < pr.n; ++i) {
+            const bool out = pr.outlier[i] != 0;
+            const bool f = flagged[size_t(i)] != 0;
+            tp += (out && f);
+            fp += (!out && f);
+            fn += (out && !f);
+            tn += (!out && !f);
+        }
+    }
+    double pct(double q) {
+        if (us.empty()) return 0.0;
+        std::vector<double> s = us;
+        std::sort(s.begin(), s.end());
+        size_t k = size_t(q * double(s.size() - 1) + 0.5);
+        return s[std::min(k, s.size() - 1)];
+    }
+    double precision() const { return (tp + fp) ? double(tp) / double(tp + fp) : 1.0; }
+    double recall() const { return (tp + fn) ? double(tp) / double(tp + fn) : 1.0; }
+    double f1() const {
+        if (tp + fp + fn == 0) return 1.0;  // no outliers and none flagged
+        const double p = precision(), r = recall();
+        return (p + r > 0) ? 2 * p * r / (p + r) : 0.0;
+    }
+};
+
+struct Method {
+    std::string name;
+    int sfd_method;  // >= 0: sfd
+    int cv_kind;     // 0: findFundamentalMat, 1: findEssentialMat
+    int cv_method;
+    double thr_px;
+};
+
+double now_us() {
+    return double(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                      std::chrono::steady_clock::now().time_since_epoch())
+                      .count()) /
+           1000.0;
+}
+
+bool run_method(const Method &m, const sim_pair_t &pr, uint64_t seed, Stats *st) {
+    std::vector<uint8_t> flagged(size_t(pr.n), 0);
+    if (m.sfd_method >= 0) {
+        sfd_assoc_params_t ap;
+        sfd_assoc_params_default(&ap);
+        ap.method = m.sfd_method;
+        ap.seed = seed;
+        if (sfd_assoc_init(&g_assoc, &ap) != SFD_OK) return false;
+        g_work.ekf = pr.ekf;  // the run updates the filter: start each from the same prior
+        const double t0 = now_us();
+        const sfd_status_t s = sfd_assoc_run(&g_assoc, &g_work.ekf, &pr.cam, pr.prev_R_CtoW,
+                                             pr.prev_p_C, pr.m, pr.n, &g_res);
+        const double t1 = now_us();
+        if (s != SFD_OK) return false;
+        for (int i = 0; i < pr.n; ++i)
+            flagged[size_t(i)] = (g_res.status[i] == SFD_VERDICT_SPURIOUS);
+        st->add(t1 - t0, flagged, pr);
+        return true;
+    }
+    std::vector<cv::Point2f> a(size_t(pr.n)), b(size_t(pr.n));
+    for (int i = 0; i < pr.n; ++i) {
+        a[size_t(i)] = cv::Point2f(float(pr.m[i].prev_uv_px[0]), float(pr.m[i].prev_uv_px[1]));
+        b[size_t(i)] = cv::Point2f(float(pr.m[i].obs.uv_px[0]), float(pr.m[i].obs.uv_px[1]));
+    }
+    cv::Mat mask;
+    cv::theRNG().state = seed;  // OpenCV's RANSAC draws from its global RNG
+    const cv::Matx33d K(pr.cam.fx_px, 0, pr.cam.cx_px, 0, pr.cam.fy_px, pr.cam.cy_px, 0, 0, 1);
+    const double t0 = now_us();
+    cv::Mat F;
+    if (m.cv_kind == 0) {
+        F = cv::findFundamentalMat(a, b, m.cv_method, m.thr_px, 0.99, mask);
+    } else {
+        F = cv::findEssentialMat(a, b, K, m.cv_method, 0.99, m.thr_px, mask);
+    }
+    const double t1 = now_us();
+    for (int i = 0; i < pr.n; ++i) {
+        flagged[size_t(i)] = mask.empty() ? 1 : (mask.at<uint8_t>(i) == 0);
+    }
+    st->add(t1 - t0, flagged, pr);
+    return true;
+}
+
+void usage_assoc(FILE *f) {
+    std::fprintf(f,
+                 "usage: sfd-bench assoc [--trials T] [--seed S] [--csv FILE] [--quick]\n"
+                 "  Same correspondences for every method; N in {50,100,200,500}, outlier ratio\n"
+                 "  {0,0.1,0.3,0.5}, pixel noise {0.5,1} px, random and structured outliers.\n"
+                 "  --quick: only N=200, 30%% outliers, 1 px (the SPEC's headline case).\n"
+                 "  Prints a markdown table; --csv writes every row.\n");
+}
+
+}  // namespace
+
+int bench_assoc(int argc, char **argv) {
+    int trials = 50;
+    uint64_t seed = 1;
+    const char *csv = nullptr;
+    bool quick = false;
+    for (int i = 2; i < argc; ++i) {
+        const char *a = argv[i];
+        if (!std::strcmp(a, "--trials") && i + 1 < argc) {
+            char *end = nullptr;
+            const long v = std::strtol(argv[++i], &end, 10);
+            if (*end != '\0' || v < 1 || v > 100000) {
+                std::fprintf(stderr, "sfd-bench: --trials: expected 1..100000\n");
+                return 2;
+            }
+            trials = int(v);
+        } else if (!std::strcmp(a, "--seed") && i + 1 < argc) {
+            seed = std::strtoull(argv[++i], nullptr, 10);
+        } else if (!std::strcmp(a, "--csv") && i + 1 < argc) {
+            csv = argv[++i];
+        } else if (!std::strcmp(a, "--quick")) {
+            quick = true;
+        } else if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
+            usage_assoc(stdout);
+            return 0;
+        } else {
+            std::fprintf(stderr, "sfd-bench: unknown or incomplete option: %s\n", a);
+            usage_assoc(stderr);
+            return 2;
+        }
+    }
+    std::vector<Method> methods = {
+        {"sfd OPRF", SFD_METHOD_OPRF, 0, 0, 0},
+        {"sfd RANSAC1", SFD_METHOD_RANSAC1, 0, 0, 0},
+        {"sfd RANSACF", SFD_METHOD_RANSACF, 0, 0, 0},
+        {"sfd none", SFD_METHOD_NONE, 0, 0, 0},
+    };
+    for (double thr : {1.0, 3.0}) {
+        const std::string t = (thr < 2) ? " @1px" : " @3px";
+        methods.push_back({"cv F FM_RANSAC" + t, -1, 0, cv::FM_RANSAC, thr});
+        methods.push_back({"cv F USAC_DEFAULT" + t, -1, 0, cv::USAC_DEFAULT, thr});
+        methods.push_back({"cv F USAC_FAST" + t, -1, 0, cv::USAC_FAST, thr});
+        methods.push_back({"cv F USAC_ACCURATE" + t, -1, 0, cv::USAC_ACCURATE, thr});
+        methods.push_back({"cv F USAC_MAGSAC" + t, -1, 0, cv::USAC_MAGSAC, thr});
+        methods.push_back({"cv E RANSAC" + t, -1, 1, cv::RANSAC, thr});
+        methods.push_back({"cv E USAC_MAGSAC" + t, -1, 1, cv::USAC_MAGSAC, thr});
+    }
+    methods.push_back({"cv F FM_LMEDS", -1, 0, cv::FM_LMEDS, 0.0});
+
+    FILE *fc = nullptr;
+    if (csv != nullptr) {
+        fc = std::fopen(csv, "w");
+        if (fc == nullptr) {
+            std::fprintf(stderr, "sfd-bench: cannot write %s\n", csv);
+            return 2;
+        }
+        std::fprintf(fc,
+                     "N,outlier_ratio,sigma_px,outliers,method,median_us,p99_us,precision,"
+                     "recall,f1\n");
+    }
+    std::printf("sfd-bench assoc: %d trials per configuration, seed %llu, OpenCV %s\n\n", trials,
+                static_cast<unsigned long long>(seed), CV_VERSION);
+    std::printf(
+        "| N | outliers | sigma | kind | method | median (us) | p99 (us) | precision | "
+        "recall | F1 |\n|---|---|---|---|---|---|---|---|---|---|\n");
+    const std::vector<int> Ns = quick ? std::vector<int>{200} : std::vector<int>{50, 100, 200, 500};
+    const std::vector<double> ratios =
+        quick ? std::vector<double>{0.3} : std::vector<double>{0.0, 0.1, 0.3, 0.5};
+    const std::vector<double> sigmas =
+        quick ? std::vector<double>{1.0} : std::vector<double>{0.5, 1.0};
+    for (int N : Ns) {
+        if (N > SFD_MAX_FEATURES) continue;
+        for (double ratio : ratios) {
+            for (double sigma : sigmas) {
+                for (int structured : {0, 1}) {
+                    if (structured && ratio == 0.0) continue;
+                    std::vector<Stats> st(methods.size());
+                    for (int t = 0; t < trials; ++t) {
+                        sim_pair_opts_t o = sim_pair_default_opts();
+                        o.n = N;
+                        o.outlier_ratio = ratio;
+                        o.sigma_px = sigma;
+                        o.structured = structured;
+                        const uint64_t s = seed * 1000003ULL + uint64_t(t);
+                        if (sim_pair_make(&g_pair, &o, s) != 0 || g_pair.n != N) {
+                            std::fprintf(stderr, "sfd-bench: scene generation failed\n");
+                            return 1;
+                        }
+                        for (size_t k = 0; k < methods.size(); ++k) {
+                            if (!run_method(methods[k], g_pair, s, &st[k])) {
+                                std::fprintf(stderr, "sfd-bench: %s failed\n",
+                                             methods[k].name.c_str());
+                                return 1;
+                            }
+                        }
+                    }
+                    const char *kind = structured ? "structured" : "random";
+                    for (size_t k = 0; k < methods.size(); ++k) {
+                        Stats &x = st[k];
+                        std::printf(
+                            "| %d | %.0f%% | %.1f | %s | %s | %.1f | %.1f | %.3f | %.3f | "
+                            "%.3f |\n",
+                            N, 100 * ratio, sigma, kind, methods[k].name.c_str(), x.pct(0.5),
+                            x.pct(0.99), x.precision(), x.recall(), x.f1());
+                        if (fc != nullptr) {
+                            std::fprintf(fc, "%d,%.2f,%.2f,%s,%s,%.3f,%.3f,%.5f,%.5f,%.5f\n", N,
+                                         ratio, sigma, kind, methods[k].name.c_str(), x.pct(0.5),
+                                         x.pct(0.99), x.precision(), x.recall(), x.f1());
+                        }
+                    }
+                }
+            }
+        }
+    }
+    if (fc != nullptr) std::fclose(fc);
+    return 0;
+}

@@ -1,0 +1,121 @@
+/* SPDX-License-Identifier: MIT */
+/**
+ * @file sfd_assoc.h
+ * @brief Data association inside the EKF (Kilic 2014 Chapter III): one-point RANSAC with epipolar
+ *        constraint (OPRF, Section 3.2 and Table 1), the baselines 1-point RANSAC with reprojection
+ *        distance (Civera et al. 2010, Table 1), fundamental-matrix RANSAC (Table 2) and no
+ *        association. Each run judges every match, updates the filter with the accepted ones and
+ *        reports what it did. Bounded: at most max_hypotheses hypotheses per frame.
+ *
+ * Derivations, the readings chosen where the thesis is ambiguous, and the limitations:
+ * core/docs/association.md.
+ */
+#ifndef SFD_ASSOC_H
+#define SFD_ASSOC_H
+#include <stdint.h>
+#include "sfd_config.h"
+#include "sfd_ekf.h"
+#include "sfd_params.h"
+#include "sfd_prng.h"
+#include "sfd_status.h"
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** One correspondence: the previous frame's observation of a track and the current one, with
+ *  the track's landmark (sfd_ekf_obs_t carries the current undistorted pixel and the landmark). */
+typedef struct {
+    double prev_uv_px[2]; /**< undistorted pixel in the previous frame */
+    sfd_ekf_obs_t obs;    /**< current undistorted pixel + landmark (world) with covariance */
+} sfd_match_t;
+
+/** Parameters of the association methods. */
+typedef struct {
+    int32_t method;          /**< SFD_METHOD_NONE, _OPRF, _RANSAC1 or _RANSACF */
+    double false_alarm_rate; /**< alpha of the inlier thresholds (chi-square), in (0, 0.5] */
+    double confidence;       /**< p of eq. (27), in (0, 1) */
+    int32_t max_hypotheses;  /**< budget per frame, 1..SFD_MAX_HYPOTHESES (both stages together) */
+    double min_parallax_px;  /**< OPRF: below this expected parallax the motion is degenerate
+                                  for epipolar geometry (px), >= 0 */
+    uint64_t seed;           /**< seed of the hypothesis draws */
+} sfd_assoc_params_t;
+
+/** Caller-owned association object: parameters, the seeded generator and the per-frame
+ *  workspace (no large arrays on the stack). Initialise with sfd_assoc_init(). */
+typedef struct {
+    sfd_assoc_params_t params;
+    sfd_prng_t rng;
+    double chi2_1; /**< chi2_{1, 1-alpha}: Sampson threshold in units of sigma^2 */
+    double chi2_2; /**< chi2_{2, 1-alpha}: reprojection / transfer threshold in sigma^2 units */
+    int32_t valid_idx[SFD_MAX_FEATURES];
+    uint8_t valid[SFD_MAX_FEATURES];
+    uint8_t cur[SFD_MAX_FEATURES];
+    uint8_t best[SFD_MAX_FEATURES];
+    uint8_t rescued[SFD_MAX_FEATURES];
+    float cur_stat[SFD_MAX_FEATURES];
+    float best_stat[SFD_MAX_FEATURES];
+    double noise_px2[SFD_MAX_FEATURES]; /**< per match: sigma^2 + landmark spread (px^2) */
+    double x_prev[SFD_MAX_FEATURES][2]; /**< compacted inputs of the fundamental-matrix RANSAC */
+    double x_curr[SFD_MAX_FEATURES][2];
+    int32_t initialized;
+} sfd_assoc_t;
+
+/** What one run decided. Entries follow the input order of the matches. */
+typedef struct {
+    int32_t n;
+    int8_t status[SFD_MAX_FEATURES];   /**< SFD_VERDICT_* (sfd_parity.h) */
+    int8_t stage[SFD_MAX_FEATURES];    /**< SFD_STAGE_* of the method that decided */
+    float statistic[SFD_MAX_FEATURES]; /**< normalized distance that decided (sigma^2 units) */
+    int32_t num_consistent;
+    int32_t num_spurious;
+    int32_t num_untested;      /**< landmark behind the camera or non-finite input */
+    int32_t hypotheses_used;   /**< hypotheses drawn, <= max_hypotheses */
+    int32_t budget_exhausted;  /**< 1 when eq. (27) asked for at least the whole budget */
+    int32_t degenerate_motion; /**< 1 when OPRF fell back to the rotation-only check */
+    int32_t inliers_stage1;    /**< Table 1 inlier set 1 */
+    int32_t inliers_stage2;    /**< Table 1 inlier set 2 (rescued from set 1's outliers) */
+    int32_t update_status;     /**< sfd_status_t of the EKF update(s) */
+    sfd_ekf_update_info_t update;
+} sfd_assoc_result_t;
+
+/** @brief Defaults: method OPRF, alpha 0.01, p 0.99, 100 hypotheses, 1 px minimum parallax,
+ *         seed 1. @return SFD_OK; SFD_ERR_INVAL for null. */
+sfd_status_t sfd_assoc_params_default(sfd_assoc_params_t *params);
+
+/** @brief The association parameters carried by the detector parameters (method, alpha,
+ *         confidence, budget, seed); min_parallax_px keeps its default.
+ *  @return SFD_OK; SFD_ERR_INVAL for null. */
+sfd_status_t sfd_assoc_params_from(const sfd_params_t *p, sfd_assoc_params_t *params);
+
+/** @brief Validates the parameters, seeds the generator, computes the thresholds.
+ *  @return SFD_OK; SFD_ERR_INVAL for null or out-of-range values (method PARITY or BOTH
+ *          included: those are not association methods); SFD_ERR_CAPACITY for a budget above
+ *          SFD_MAX_HYPOTHESES. */
+sfd_status_t sfd_assoc_init(sfd_assoc_t *assoc, const sfd_assoc_params_t *params);
+
+/**
+ * @brief Judges the matches of one frame and updates the filter with the accepted ones.
+ *
+ * @p ekf holds the prior at the current frame (propagated by the IMU); on return it holds the
+ * posterior (unless the update failed, see update_status). @p prev_R_CtoW / @p prev_p_CinW_m
+ * are the previous frame's camera pose (the filter's posterior there), needed by the epipolar
+ * methods. Methods:
+ * - OPRF (Table 1 + Section 3.2): hypotheses = one random match -> single-match EKF update of a
+ *   scratch pose -> F of the relative pose previous camera / hypothesized camera (eq. (26)) ->
+ *   Sampson distance of every match's (previous, current) pixels; eq. (27) adapts the count;
+ *   update with set 1; rescore set 1's outliers with the updated pose (set 2); update with set 2.
+ * - RANSAC1: the same loop, scored by the reprojection distance of the landmark.
+ * - RANSACF: Table 2 on the (previous, current) pixels, then the update with its inliers.
+ * - NONE: every valid match is accepted and used.
+ * @return SFD_OK (the verdicts are in @p out, also when the EKF update failed: update_status);
+ *         SFD_ERR_STATE when @p assoc or @p ekf is not initialized; SFD_ERR_INVAL for null
+ *         pointers, n outside [0, SFD_MAX_FEATURES] or a non-finite previous pose.
+ */
+sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_ekf_t *ekf, const sfd_ekf_camera_t *cam,
+                           const double prev_R_CtoW[9], const double prev_p_CinW_m[3],
+                           const sfd_match_t *matches, int32_t n, sfd_assoc_result_t *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* SFD_ASSOC_H */
