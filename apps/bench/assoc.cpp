@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -44,7 +45,7 @@ struct Stats {
         if (us.empty()) return 0.0;
         std::vector<double> s = us;
         std::sort(s.begin(), s.end());
-        size_t k = size_t(q * double(s.size() - 1) + 0.5);
+        const size_t k = size_t(std::lround(q * double(s.size() - 1)));
         return s[std::min(k, s.size() - 1)];
     }
     double precision() const { return (tp + fp) ? double(tp) / double(tp + fp) : 1.0; }

@@ -145,8 +145,10 @@ static inline int sim_pair_make(sim_pair_t *pr, const sim_pair_opts_t *o, uint64
         ++n;
     }
     pr->n = n;
-    /* outliers: a fixed count, the first ones after a shuffle-free stride */
-    const int n_out = (int)(o->outlier_ratio * n + 0.5);
+    if (n == 0) return -1;
+    /* outliers: round(ratio * n) distinct matches drawn at random */
+    int n_out = (int)lround(o->outlier_ratio * n);
+    if (n_out > n) n_out = n;
     for (int k = 0; k < n_out; ++k) {
         int i = (int)sfd_prng_uniform_index(&rng, (uint32_t)n);
         while (pr->outlier[i]) i = (i + 1) % n;
