@@ -24,12 +24,17 @@ endfunction()
 # __cxa_guard_acquire), no FMA contraction and no fast-math (bit-identical results with the same
 # binary, and across targets wherever the libm calls agree), -O2 whatever the build type: at
 # -O0/-O1/-Os Eigen keeps never-taken heap fallbacks that the symbol check would (rightly) flag.
-# -fstack-usage and -fcallgraph-info=su feed tools/stack_report.py (worst-case stack, no recursion).
+# -fstack-usage and -fcallgraph-info=su (GCC's; clang has no call-graph dump) feed
+# tools/stack_report.py (worst-case stack, no recursion); every GCC build gets them, the clang
+# fuzz build (SFD_BUILD_FUZZERS) goes without, and its presets run no stack proof.
 function(sfd_target_flight_rules target)
   target_compile_options(${target} PRIVATE
     $<$<COMPILE_LANGUAGE:CXX>:-fno-exceptions -fno-rtti -fno-threadsafe-statics>
     -ffp-contract=off -fno-fast-math -fno-associative-math
-    -O2 -fstack-usage -fcallgraph-info=su
+    -O2
+    $<$<COMPILE_LANG_AND_ID:C,GNU>:-fstack-usage> $<$<COMPILE_LANG_AND_ID:CXX,GNU>:-fstack-usage>
+    $<$<COMPILE_LANG_AND_ID:C,GNU>:-fcallgraph-info=su>
+    $<$<COMPILE_LANG_AND_ID:CXX,GNU>:-fcallgraph-info=su>
     -Werror)
   target_compile_definitions(${target} PRIVATE EIGEN_NO_IO EIGEN_NO_AUTOMATIC_RESIZING
                              EIGEN_MPL2_ONLY)
@@ -41,4 +46,19 @@ function(sfd_target_sanitizers target)
                            -fno-sanitize-recover=all)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined)
   endif()
+endfunction()
+
+# libFuzzer build (SFD_BUILD_FUZZERS, preset `fuzz`, clang only): every target of the project,
+# generated LCM code included, gets the fuzzer's coverage instrumentation and ASan + UBSan; the
+# fuzz executables link libFuzzer itself (tests/fuzz). Directory-wide, so call it before the
+# subdirectories are added.
+function(sfd_enable_fuzzing_instrumentation)
+  if(NOT CMAKE_C_COMPILER_ID STREQUAL "Clang" OR NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR
+      "SFD_BUILD_FUZZERS needs clang for C and C++ (libFuzzer); got C: ${CMAKE_C_COMPILER_ID}, "
+      "C++: ${CMAKE_CXX_COMPILER_ID}. Use the `fuzz` preset (clang-14 / clang++-14).")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all
+                      -fno-omit-frame-pointer -g)
+  add_link_options(-fsanitize=address,undefined)
 endfunction()

@@ -10,7 +10,8 @@ root="$(cd "$here/.." && pwd)"
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
-# Debian packages (SPEC "Dependencies") plus the analysis tools CI runs.
+# Debian packages (SPEC "Dependencies") plus the analysis tools CI runs (clang-14 with its
+# sanitizer and libFuzzer runtimes, libclang-rt-14-dev, for the `fuzz` preset).
 APT_PKGS=(
   build-essential cmake ninja-build pkg-config ccache
   libeigen3-dev
@@ -20,6 +21,7 @@ APT_PKGS=(
   gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib binutils-arm-none-eabi
   g++-aarch64-linux-gnu qemu-user
   clang-format cppcheck clang-tidy
+  clang-14 libclang-rt-14-dev
   valgrind
   python3 python3-pip python3-venv
 )

@@ -5,13 +5,14 @@
 #   host-asan  Debug with AddressSanitizer + UndefinedBehaviorSanitizer
 #   cortex-m7  core cross-built for arm-none-eabi (hard float): symbol, stack and size proofs
 #   aarch64    core + unit tests cross-built, run under qemu-aarch64
+#   fuzz       clang-14 libFuzzer targets (ASan + UBSan), 20 s each from sfd-sim seeds (fuzz.*)
 # Usage: tools/test.sh [--host-only]
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 bash tools/setup.sh
 
-presets=(host host-asan cortex-m7 aarch64)
+presets=(host host-asan cortex-m7 aarch64 fuzz)
 if [ "${1:-}" = "--host-only" ]; then presets=(host); fi
 
 jobs="$(nproc 2>/dev/null || echo 2)"

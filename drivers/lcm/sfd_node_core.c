@@ -178,7 +178,9 @@ static void handle_camera_info(sfd_node_t *n, const void *data, int32_t size) {
         count(n, r);
         return;
     }
-    if (n->camera_id >= 0 && id != n->camera_id) {
+    /* The camera is fixed by the config (>= 0) or by the first calibration accepted, whatever
+     * its id: a negative id on the wire must not reopen the choice (found by fuzz.camera_info). */
+    if ((n->have_camera || n->camera_id >= 0) && id != n->camera_id) {
         count(n, SFD_REJECT_CAMERA_ID);
         return;
     }

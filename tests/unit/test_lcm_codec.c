@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* unit.lcm_codec: every sfd LCM type round-trips through the generated C code; the driver's
- * decode rejects short, corrupt and out-of-range messages before the core sees them. */
+ * decode rejects short, corrupt and out-of-range messages before the core sees them; the node's
+ * message handling keeps to the camera it follows. */
 #include "sfd_test.h"
 
 #include "euroc_calib.h"
@@ -14,6 +15,7 @@
 #include "sfd_imu_t.h"
 #include "sfd_lcm_codec.h"
 #include "sfd_nav_state_t.h"
+#include "sfd_node_core.h"
 #include "sfd_timing_t.h"
 #include "sfd_truth_t.h"
 
@@ -223,11 +225,91 @@ static void lcm_imu_and_camera_info_validated(void **state) {
                      SFD_REJECT_NONFINITE);
 }
 
+static sfd_node_t g_node;
+static sfd_feature_verdict_t g_last_verdict;
+static int g_verdicts;
+
+static void keep_verdict(void *ctx, sfd_node_output_t kind, const void *data, int32_t size,
+                         int64_t utime) {
+    (void)ctx;
+    (void)utime;
+    if (kind != SFD_NODE_OUT_VERDICT) return;
+    assert_int_equal(sfd_feature_verdict_t_decode(data, 0, size, &g_last_verdict), size);
+    g_verdicts++;
+}
+
+static void handle_camera_info(int32_t camera_id) {
+    sfd_camera_info_t ci;
+    memset(&ci, 0, sizeof ci);
+    ci.camera_id = camera_id;
+    ci.width = 752;
+    ci.height = 480;
+    ci.fx = ci.fy = 450.0;
+    ci.cx = 376.0;
+    ci.cy = 240.0;
+    ci.distortion_model = SFD_CAMERA_INFO_T_PINHOLE;
+    memcpy(ci.T_imu_cam, kEurocTimuCam, sizeof ci.T_imu_cam);
+    ci.fx += camera_id; /* a calibration of its own per camera */
+    const int n = sfd_camera_info_t_encode(g_buf, 0, BUF, &ci);
+    sfd_node_handle(&g_node, SFD_NODE_CAMERA_INFO, g_buf, n);
+}
+
+static void handle_frame(int64_t utime, int32_t camera_id) {
+    memset(&g_ff, 0, sizeof g_ff);
+    g_ff.utime = utime;
+    g_ff.camera_id = camera_id;
+    g_ff.num_features = 2;
+    g_ff.track_id[0] = 1;
+    g_ff.track_id[1] = 2;
+    g_ff.u[0] = g_ff.v[0] = 100.0;
+    g_ff.u[1] = g_ff.v[1] = 200.0;
+    sfd_node_handle(&g_node, SFD_NODE_FEATURES, g_buf, encode_ff());
+}
+
+/* GIVEN a node configured to follow the first camera WHEN the first calibration carries a
+ * negative camera_id THEN the node follows that camera and no other: a later CAMERA_INFO and
+ * FEATURES of another camera are rejected (CAMERA_ID) and verdicts name the followed camera.
+ * (Regression: a negative id used to read as "none chosen yet", so the next camera's calibration
+ * replaced it and a frame waiting for IMU was judged and labelled with the new camera; found by
+ * fuzz.camera_info.) */
+static void lcm_node_follows_first_camera_even_with_negative_id(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-004");
+    sfd_node_config_t cfg;
+    memset(&cfg, 0, sizeof cfg);
+    assert_status(sfd_params_default(&cfg.params), SFD_OK);
+    cfg.params.method = SFD_METHOD_NONE;
+    cfg.camera_id = -1;
+    assert_status(sfd_node_init(&g_node, &cfg, keep_verdict, NULL, NULL), SFD_OK);
+    g_verdicts = 0;
+    handle_camera_info(-7);
+    assert_int_equal(g_node.have_camera, 1);
+    assert_int_equal(g_node.camera_id, -7);
+    handle_camera_info(3);
+    assert_int_equal(g_node.camera_id, -7);
+    assert_true(g_node.counters.rejected[SFD_REJECT_CAMERA_ID] == 1);
+    handle_frame(1000, 3);
+    assert_true(g_node.counters.rejected[SFD_REJECT_CAMERA_ID] == 2);
+    assert_int_equal(g_verdicts, 0);
+    handle_frame(2000, -7);
+    assert_int_equal(g_verdicts, 1);
+    assert_int_equal(g_last_verdict.camera_id, -7);
+    assert_int_equal(g_last_verdict.num_features, 2);
+    /* a configured camera is kept the same way */
+    cfg.camera_id = 5;
+    assert_status(sfd_node_init(&g_node, &cfg, keep_verdict, NULL, NULL), SFD_OK);
+    handle_camera_info(-1);
+    assert_int_equal(g_node.have_camera, 0);
+    handle_camera_info(5);
+    assert_int_equal(g_node.camera_id, 5);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(lcm_every_type_round_trips_at_max_size),
         cmocka_unit_test(lcm_features_decode_validates_before_core),
         cmocka_unit_test(lcm_imu_and_camera_info_validated),
+        cmocka_unit_test(lcm_node_follows_first_camera_even_with_negative_id),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
