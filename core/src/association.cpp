@@ -103,24 +103,120 @@ Gate gate_of(Score score, const sfd_assoc_t &a, double sigma2, double noise_px2)
     }
 }
 
-/// Scores every valid match under @p model into a.cur / a.cur_stat; returns the inlier count.
+/// Inliers of F among the packed matches (Sampson distance of eq. (25) <= thr, px^2, compared
+/// without division: e^2 <= thr * den); flags into @p flag. Stops early, returning a count below
+/// @p need, once even all remaining matches could not reach @p need (the flags are then partial
+/// and unused: only a better hypothesis is kept).
+int32_t sampson_count(const double F[9], const double (*x1)[2], const double (*x2)[2], int32_t nv,
+                      double thr, uint8_t *flag, int32_t need) {
+    int32_t count = 0;
+    for (int32_t k = 0; k < nv; ++k) {
+        if (count + (nv - k) < need) return count;
+        const double u1 = x1[k][0], v1 = x1[k][1], u2 = x2[k][0], v2 = x2[k][1];
+        const double f0 = F[0] * u2 + F[1] * v2 + F[2];
+        const double f1 = F[3] * u2 + F[4] * v2 + F[5];
+        const double f2 = F[6] * u2 + F[7] * v2 + F[8];
+        const double g0 = F[0] * u1 + F[3] * v1 + F[6];
+        const double g1 = F[1] * u1 + F[4] * v1 + F[7];
+        const double e = u1 * f0 + v1 * f1 + f2;
+        const double den = f0 * f0 + f1 * f1 + g0 * g0 + g1 * g1;
+        const uint8_t in = (den > 0.0 && e * e <= thr * den) ? 1U : 0U;
+        flag[k] = in;
+        count += in;
+    }
+    return count;
+}
+
+/// Scores every valid match (restricted to @p only when given) under @p model into a.cur /
+/// a.cur_stat; returns the inlier count. One loop per distance, with the threshold hoisted.
 int32_t score_all(sfd_assoc_t *a, Score score, const sfd_ekf_camera_t &cam, const Model &model,
                   const sfd_match_t *m, int32_t n, const uint8_t *only) {
     const double sigma2 = cam.pixel_sigma_px * cam.pixel_sigma_px;
     int32_t count = 0;
+    if (score == Score::kSampson) {
+        // Sampson distance of eq. (25) in px^2, inlined: F x_cur, F^T x_prev, x_prev^T F x_cur.
+        const double *F = model.F;
+        const double thr = a->chi2_1 * sigma2;
+        const double inv_unit = 1.0 / sigma2;
+        for (int32_t i = 0; i < n; ++i) {
+            a->cur[i] = 0U;
+            if (a->valid[i] == 0U || (only != nullptr && only[i] == 0U)) continue;
+            const double u1 = m[i].prev_uv_px[0], v1 = m[i].prev_uv_px[1];
+            const double u2 = m[i].obs.uv_px[0], v2 = m[i].obs.uv_px[1];
+            const double f0 = F[0] * u2 + F[1] * v2 + F[2];
+            const double f1 = F[3] * u2 + F[4] * v2 + F[5];
+            const double f2 = F[6] * u2 + F[7] * v2 + F[8];
+            const double g0 = F[0] * u1 + F[3] * v1 + F[6];
+            const double g1 = F[1] * u1 + F[4] * v1 + F[7];
+            const double e = u1 * f0 + v1 * f1 + f2;
+            const double den = f0 * f0 + f1 * f1 + g0 * g0 + g1 * g1;
+            const double d = (den > 0.0) ? e * e / den : std::numeric_limits<double>::infinity();
+            a->cur_stat[i] = static_cast<float>(std::fmin(d * inv_unit, 3.0e38));
+            if (d <= thr) {
+                a->cur[i] = 1U;
+                ++count;
+            }
+        }
+        return count;
+    }
     for (int32_t i = 0; i < n; ++i) {
         a->cur[i] = 0U;
         if (a->valid[i] == 0U || (only != nullptr && only[i] == 0U)) continue;
         const double d = distance_px2(score, cam, model, m[i]);
         const Gate g = gate_of(score, *a, sigma2, a->noise_px2[i]);
-        const double stat = d / g.unit_px2;
-        a->cur_stat[i] = static_cast<float>(std::fmin(stat, 3.0e38));
+        a->cur_stat[i] = static_cast<float>(std::fmin(d / g.unit_px2, 3.0e38));
         if (d <= g.thr_px2) {
             a->cur[i] = 1U;
             ++count;
         }
     }
     return count;
+}
+
+/// nu^T (H P_ss H^T + R)^-1 nu with P_ss = L L^T given by its Cholesky factor (H L computed
+/// once, 2x6 times lower-triangular 6x6); +inf when S is not PD.
+double mahalanobis2(const Linearized &lin, const Mat6 &Lss) {
+    double hl0[6], hl1[6];  // rows of H L (L lower triangular)
+    for (int k = 0; k < 6; ++k) {
+        double s0 = 0.0, s1 = 0.0;
+        for (int j = k; j < 6; ++j) {
+            s0 += lin.H(0, j) * Lss(j, k);
+            s1 += lin.H(1, j) * Lss(j, k);
+        }
+        hl0[k] = s0;
+        hl1[k] = s1;
+    }
+    double s00 = lin.R(0, 0), s11 = lin.R(1, 1), s01 = 0.5 * (lin.R(0, 1) + lin.R(1, 0));
+    for (int k = 0; k < 6; ++k) {
+        s00 += hl0[k] * hl0[k];
+        s11 += hl1[k] * hl1[k];
+        s01 += hl0[k] * hl1[k];
+    }
+    const double det = s00 * s11 - s01 * s01;
+    if (!(det > 0.0) || !(s00 > 0.0)) return std::numeric_limits<double>::infinity();
+    const double x = lin.nu(0), y = lin.nu(1);
+    return (s11 * x * x - 2.0 * s01 * x * y + s00 * y * y) / det;
+}
+
+/// Cholesky factor of the pose covariance (lower); a tiny diagonal load keeps a PSD-but-singular
+/// P_ss factorizable (the gate then treats that direction as known).
+Mat6 pose_cholesky(const Mat6 &Pss) {
+    Mat6 L = Mat6::Zero();
+    double max_diag = 0.0;
+    for (int i = 0; i < 6; ++i) max_diag = std::fmax(max_diag, Pss(i, i));
+    const double load = 1e-12 * max_diag + 1e-300;
+    for (int j = 0; j < 6; ++j) {
+        double sjj = Pss(j, j) + load;
+        for (int k = 0; k < j; ++k) sjj -= L(j, k) * L(j, k);
+        const double ljj = (sjj > 0.0) ? std::sqrt(sjj) : 0.0;
+        L(j, j) = ljj;
+        for (int i = j + 1; i < 6; ++i) {
+            double t = Pss(i, j);
+            for (int k = 0; k < j; ++k) t -= L(i, k) * L(j, k);
+            L(i, j) = (ljj > 0.0) ? t / ljj : 0.0;
+        }
+    }
+    return L;
 }
 
 /// Expected parallax (px) between the previous camera and the prior current camera: focal length
@@ -133,28 +229,25 @@ double expected_parallax_px(const sfd_ekf_camera_t &cam, const CameraPose &prev,
     return f * baseline * (*inv_depth_sum / count);
 }
 
-/// Individual compatibility (thesis Section 1.2.1.1): removes from @p set the matches whose
-/// innovation under the filter (R_ItoW, P_ss) fails nu^T (H P_ss H^T + R)^-1 nu <= chi2_{2,1-a};
-/// their statistic becomes that Mahalanobis value. Returns how many were removed.
-int32_t gate_innovations(sfd_assoc_t *a, const sfd_ekf_t &ekf, const Mat3 &R_ItoW, const Mat6 &Pss,
-                         const sfd_ekf_camera_t &cam, const sfd_match_t *m, int32_t n,
-                         uint8_t *set) {
+/// Individual compatibility (thesis Section 1.2.1.1) of one linearized match under the
+/// filter's pose covariance (Cholesky factor @p Lss): nu^T (H P_ss H^T + R)^-1 nu.
+bool passes_gate(const sfd_assoc_t &a, const Linearized &lin, const Mat6 &Lss, double *d2) {
+    *d2 = mahalanobis2(lin, Lss);
+    return *d2 <= a.chi2_2;
+}
+
+/// Removes from @p set the matches failing the gate at the filter @p ekf (each linearized there);
+/// their statistic becomes the Mahalanobis value. Returns how many were removed.
+int32_t gate_innovations(sfd_assoc_t *a, const sfd_ekf_t &ekf, const sfd_ekf_camera_t &cam,
+                         const sfd_match_t *m, int32_t n, uint8_t *set) {
+    const Mat6 Lss = pose_cholesky(pose_covariance(ekf));
+    const Linearizer lz(ekf, ekf_rotation(ekf), cam);
     int32_t removed = 0;
     for (int32_t i = 0; i < n; ++i) {
         if (set[i] == 0U) continue;
         Linearized lin;
         double d2 = std::numeric_limits<double>::infinity();
-        if (linearize(ekf, R_ItoW, cam, m[i].obs, &lin)) {
-            const Mat2 S = lin.H * Pss * lin.H.transpose() + lin.R;
-            const double det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
-            if (det > 0.0 && S(0, 0) > 0.0) {
-                const Vec2 &v = lin.nu;
-                d2 = (S(1, 1) * v(0) * v(0) - (S(0, 1) + S(1, 0)) * v(0) * v(1) +
-                      S(0, 0) * v(1) * v(1)) /
-                     det;
-            }
-        }
-        if (!(d2 <= a->chi2_2)) {
+        if (!lz.linearize(m[i].obs, &lin) || !passes_gate(*a, lin, Lss, &d2)) {
             set[i] = 0U;
             a->best_stat[i] = static_cast<float>(std::fmin(d2, 3.0e38));
             ++removed;
@@ -223,10 +316,39 @@ extern "C" sfd_status_t sfd_assoc_init(sfd_assoc_t *assoc, const sfd_assoc_param
     return SFD_OK;
 }
 
-extern "C" sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
-                                      const sfd_ekf_camera_t *cam, const double prev_R_CtoW[9],
-                                      const double prev_p_CinW_m[3], const sfd_match_t *matches,
-                                      int32_t n, sfd_assoc_result_t *out) {
+namespace {
+
+bool same_prior(const sfd_assoc_t &a, const sfd_ekf_t &ekf) {
+    for (int k = 0; k < 3; ++k) {
+        if (std::memcmp(&a.prior_p_m[k], &ekf.p_IinW_m[k], sizeof(double)) != 0) return false;
+    }
+    for (int k = 0; k < 4; ++k) {
+        if (std::memcmp(&a.prior_q[k], &ekf.q_ItoW[k], sizeof(double)) != 0) return false;
+    }
+    return true;
+}
+
+void write_verdicts(const sfd_assoc_t &a, sfd_assoc_result_t *out) {
+    for (int32_t i = 0; i < a.n; ++i) {
+        if (a.valid[i] == 0U) {
+            out->status[i] = SFD_VERDICT_UNTESTED;
+            out->stage[i] = SFD_STAGE_NONE;
+            out->statistic[i] = 0.0F;
+            continue;
+        }
+        out->status[i] = (a.best[i] != 0U) ? SFD_VERDICT_CONSISTENT : SFD_VERDICT_SPURIOUS;
+        out->stage[i] = a.stage;
+        out->statistic[i] = a.best_stat[i];
+    }
+    finish_counts(out);
+}
+
+}  // namespace
+
+extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ekf,
+                                         const sfd_ekf_camera_t *cam, const double prev_R_CtoW[9],
+                                         const double prev_p_CinW_m[3], const sfd_match_t *matches,
+                                         int32_t n, sfd_assoc_result_t *out) {
     if (assoc == nullptr || ekf == nullptr || cam == nullptr || prev_R_CtoW == nullptr ||
         prev_p_CinW_m == nullptr || out == nullptr || (matches == nullptr && n > 0)) {
         return SFD_ERR_INVAL;
@@ -239,11 +361,21 @@ extern "C" sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
     *out = sfd_assoc_result_t{};
     out->n = n;
     out->update_status = SFD_OK;
+    a.selected = 0;
+    a.n = n;
+    for (int k = 0; k < 9; ++k) a.prev_R_CtoW[k] = prev_R_CtoW[k];
+    for (int k = 0; k < 3; ++k) {
+        a.prev_p_CinW_m[k] = prev_p_CinW_m[k];
+        a.prior_p_m[k] = ekf->p_IinW_m[k];
+    }
+    for (int k = 0; k < 4; ++k) a.prior_q[k] = ekf->q_ItoW[k];
 
-    // Linearize at the prior once: validity, landmark spread, mean inverse depth.
+    // Validity of every match at the prior (landmark in front of the camera, finite input) and
+    // the mean inverse depth; RANSAC1 also needs each landmark's spread in pixels.
     const Mat3 R_prior = ekf_rotation(*ekf);
-    const Vec3 p_prior(ekf->p_IinW_m[0], ekf->p_IinW_m[1], ekf->p_IinW_m[2]);
+    const Linearizer lz(*ekf, R_prior, *cam);
     const double sigma2 = cam->pixel_sigma_px * cam->pixel_sigma_px;
+    const bool need_spread = (prm.method == SFD_METHOD_RANSAC1);
     int32_t nv = 0;
     double inv_depth_sum = 0.0;
     for (int32_t i = 0; i < n; ++i) {
@@ -251,36 +383,40 @@ extern "C" sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
         a.valid[i] = 0U;
         a.cur[i] = a.best[i] = a.rescued[i] = 0U;
         a.best_stat[i] = a.cur_stat[i] = 0.0F;
-        out->status[i] = SFD_VERDICT_UNTESTED;
-        out->stage[i] = SFD_STAGE_NONE;
-        out->statistic[i] = 0.0F;
-        Linearized lin;
+        double c[3];
         if (!all_finite(mt.prev_uv_px, 2) || !all_finite(mt.obs.uv_px, 2) ||
             !all_finite(mt.obs.landmark_W_m, 3) || !all_finite(mt.obs.landmark_cov_m2, 9) ||
-            !linearize(*ekf, R_prior, *cam, mt.obs, &lin)) {
+            !lz.camera_point(mt.obs.landmark_W_m, c)) {
             continue;
+        }
+        if (need_spread) {
+            Linearized lin;
+            if (!lz.linearize(mt.obs, &lin)) continue;
+            a.noise_px2[i] = 0.5 * (lin.R(0, 0) + lin.R(1, 1));  // sigma^2 + landmark spread
+        } else {
+            a.noise_px2[i] = sigma2;
         }
         a.valid[i] = 1U;
         a.valid_idx[nv++] = i;
-        a.noise_px2[i] = 0.5 * (lin.R(0, 0) + lin.R(1, 1));  // sigma^2 + landmark spread
-        inv_depth_sum += 1.0 / lin.p_LinC.z();
+        inv_depth_sum += 1.0 / c[2];
     }
+    a.stage = SFD_STAGE_NONE;
+    a.score_kind = static_cast<int32_t>(Score::kSampson);
+    a.selected = 1;
     if (nv == 0) {
-        finish_counts(out);
+        write_verdicts(a, out);
         return SFD_OK;
     }
 
-    Eigen::Map<const Mat3> Rp(prev_R_CtoW);
     CameraPose prev;
-    prev.R_WtoC = Rp.transpose();
+    prev.R_WtoC = Eigen::Map<const Mat3>(prev_R_CtoW).transpose();
     prev.p_CinW = Vec3(prev_p_CinW_m[0], prev_p_CinW_m[1], prev_p_CinW_m[2]);
 
-    int8_t stage = SFD_STAGE_NONE;
     if (prm.method == SFD_METHOD_NONE) {
         for (int32_t k = 0; k < nv; ++k) a.best[a.valid_idx[k]] = 1U;
         out->inliers_stage1 = nv;
     } else if (prm.method == SFD_METHOD_RANSACF) {
-        stage = SFD_STAGE_RANSAC_F;
+        a.stage = SFD_STAGE_RANSAC_F;
         for (int32_t k = 0; k < nv; ++k) {
             const sfd_match_t &mt = matches[a.valid_idx[k]];
             a.x_prev[k][0] = mt.prev_uv_px[0];
@@ -296,6 +432,7 @@ extern "C" sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
             // fewer than 8 matches, or every sample degenerate: nothing can be judged
             for (int32_t k = 0; k < nv; ++k) a.valid[a.valid_idx[k]] = 0U;
         } else if (st != SFD_OK) {
+            a.selected = 0;
             return st;
         } else {
             out->hypotheses_used = rf.hypotheses_used;
@@ -311,9 +448,10 @@ extern "C" sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
     } else {
         // OPRF / RANSAC1: the hypothesize-and-test loop of Table 1 (lines 1-7).
         const bool oprf = (prm.method == SFD_METHOD_OPRF);
-        stage = oprf ? SFD_STAGE_OPRF : SFD_STAGE_RANSAC_1PT;
+        a.stage = oprf ? SFD_STAGE_OPRF : SFD_STAGE_RANSAC_1PT;
         Score score = oprf ? Score::kSampson : Score::kReproj;
         if (oprf) {
+            const Vec3 p_prior(ekf->p_IinW_m[0], ekf->p_IinW_m[1], ekf->p_IinW_m[2]);
             const CameraPose cur_prior = camera_pose(R_prior, p_prior, cam->ext);
             if (expected_parallax_px(*cam, prev, cur_prior, &inv_depth_sum, nv) <
                 prm.min_parallax_px) {
@@ -321,7 +459,21 @@ extern "C" sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
                 out->degenerate_motion = 1;
             }
         }
+        a.score_kind = static_cast<int32_t>(score);
         const Mat6 Pss = pose_covariance(*ekf);
+        // OPRF's Sampson scoring runs over packed pixel arrays of the valid matches.
+        const bool packed = (score == Score::kSampson);
+        if (packed) {
+            for (int32_t k = 0; k < nv; ++k) {
+                const sfd_match_t &mt = matches[a.valid_idx[k]];
+                a.x_prev[k][0] = mt.prev_uv_px[0];
+                a.x_prev[k][1] = mt.prev_uv_px[1];
+                a.x_curr[k][0] = mt.obs.uv_px[0];
+                a.x_curr[k][1] = mt.obs.uv_px[1];
+            }
+        }
+        const double thr_sampson = a.chi2_1 * sigma2;
+        Model best_model{};
         int32_t best_count = -1;
         int32_t needed = prm.max_hypotheses;  // line 1: "a big value"
         int32_t h = 0;
@@ -331,83 +483,138 @@ extern "C" sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
             Linearized lin;
             Mat3 R_h;
             Vec3 p_h;
-            if (!linearize(*ekf, R_prior, *cam, matches[pick].obs, &lin) ||
+            if (!lz.linearize(matches[pick].obs, &lin) ||
                 !single_update_pose(*ekf, R_prior, Pss, lin, &R_h, &p_h)) {
                 continue;  // a failed hypothesis still counts against the budget
             }
             const Model model = make_model(*cam, prev, R_h, p_h);
-            const int32_t count = score_all(&a, score, *cam, model, matches, n, nullptr);
+            const int32_t count = packed ? sampson_count(model.F, a.x_prev, a.x_curr, nv,
+                                                         thr_sampson, a.cur, best_count + 1)
+                                         : score_all(&a, score, *cam, model, matches, n, nullptr);
             if (count > best_count) {  // line 6
                 best_count = count;
-                for (int32_t i = 0; i < n; ++i) {
-                    a.best[i] = a.cur[i];
-                    a.best_stat[i] = a.cur_stat[i];
+                best_model = model;
+                if (packed) {
+                    for (int32_t k = 0; k < nv; ++k) a.best[a.valid_idx[k]] = a.cur[k];
+                } else {
+                    for (int32_t i = 0; i < n; ++i) {
+                        a.best[i] = a.cur[i];
+                        a.best_stat[i] = a.cur_stat[i];
+                    }
                 }
                 needed = sfd_ransac_hypothesis_count(
                     prm.confidence, static_cast<double>(count) / static_cast<double>(nv), 1,
                     prm.max_hypotheses);
             }
         }
+        if (packed && best_count >= 0) {  // the statistics of the best hypothesis, once
+            const double inv_s2 = 1.0 / sigma2;
+            for (int32_t k = 0; k < nv; ++k) {
+                const double d = sfd_sampson_sq_px2(best_model.F, a.x_prev[k], a.x_curr[k]);
+                const double st = d * inv_s2;
+                a.best_stat[a.valid_idx[k]] = static_cast<float>((st < 3.0e38) ? st : 3.0e38);
+            }
+        }
         out->hypotheses_used = h;
         out->budget_exhausted = (needed >= prm.max_hypotheses) ? 1 : 0;
-        out->inliers_stage1 = (best_count > 0) ? best_count : 0;
         if (best_count <= 0) {
+            best_count = 0;
             for (int32_t i = 0; i < n; ++i) a.best[i] = 0U;
         }
-        // sfd addition (core/docs/association.md): an epipolar test cannot see an error along
-        // the epipolar line, and such a match pulls the update by its full reprojection error.
-        // Before line 8, OPRF's set 1 therefore also passes the individual-compatibility gate of
-        // its innovation under the prior (thesis Section 1.2.1.1), nu^T S^-1 nu <= chi2_{2,1-a}.
-        if (oprf && best_count > 0) {
-            best_count -= gate_innovations(&a, *ekf, R_prior, Pss, *cam, matches, n, a.best);
-        }
-        // Line 8: update the filter with inlier set 1.
-        const MatchObs view{matches};
-        sfd_ekf_update_info_t info1{};
-        sfd_status_t st = update_camera(ekf, *cam, view, a.best, n, &info1);
-        out->update = info1;
-        out->update_status = st;
-        // Lines 9-12: rescore set 1's outliers under the updated filter; the rescued form set 2.
-        if (st == SFD_OK && best_count > 0) {
-            const Mat3 R_post = ekf_rotation(*ekf);
-            const Vec3 p_post(ekf->p_IinW_m[0], ekf->p_IinW_m[1], ekf->p_IinW_m[2]);
-            const Model model = make_model(*cam, prev, R_post, p_post);
-            for (int32_t i = 0; i < n; ++i) a.rescued[i] = (a.best[i] == 0U) ? a.valid[i] : 0U;
-            int32_t count2 = score_all(&a, score, *cam, model, matches, n, a.rescued);
-            for (int32_t i = 0; i < n; ++i) {
-                a.rescued[i] = a.cur[i];
-                if (a.valid[i] != 0U && a.best[i] == 0U) a.best_stat[i] = a.cur_stat[i];
-            }
-            if (oprf && count2 > 0) {
-                count2 -= gate_innovations(&a, *ekf, R_post, pose_covariance(*ekf), *cam, matches,
-                                           n, a.rescued);
-            }
-            out->inliers_stage2 = count2;
-            if (count2 > 0) {  // line 13: merge; the merged set's update is set 2's on top of 1
-                sfd_ekf_update_info_t info2{};
-                st = update_camera(ekf, *cam, view, a.rescued, n, &info2);
-                out->update_status = st;
-                out->update.used += info2.used;
-                out->update.skipped += info2.skipped;
-                out->update.nis += info2.nis;
-                for (int32_t i = 0; i < n; ++i) {
-                    if (a.rescued[i] != 0U) a.best[i] = 1U;
-                }
-            }
-        }
+        out->inliers_stage1 = best_count;
     }
-    if (prm.method == SFD_METHOD_NONE || prm.method == SFD_METHOD_RANSACF) {
-        const MatchObs view{matches};
-        sfd_ekf_update_info_t info{};
-        out->update_status = update_camera(ekf, *cam, view, a.best, n, &info);
-        out->update = info;
-    }
-    for (int32_t i = 0; i < n; ++i) {
-        if (a.valid[i] == 0U) continue;
-        out->status[i] = (a.best[i] != 0U) ? SFD_VERDICT_CONSISTENT : SFD_VERDICT_SPURIOUS;
-        out->stage[i] = stage;
-        out->statistic[i] = a.best_stat[i];
-    }
-    finish_counts(out);
+    write_verdicts(a, out);
     return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_assoc_apply(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
+                                        const sfd_ekf_camera_t *cam, const sfd_match_t *matches,
+                                        int32_t n, sfd_assoc_result_t *out) {
+    if (assoc == nullptr || ekf == nullptr || cam == nullptr || out == nullptr ||
+        (matches == nullptr && n > 0)) {
+        return SFD_ERR_INVAL;
+    }
+    sfd_assoc_t &a = *assoc;
+    if (a.initialized != 1 || a.selected != 1 || ekf->initialized != 1 || n != a.n || out->n != n ||
+        !same_prior(a, *ekf)) {
+        return SFD_ERR_STATE;
+    }
+    a.selected = 0;
+    const bool oprf = (a.params.method == SFD_METHOD_OPRF);
+    // sfd addition (core/docs/association.md): an epipolar test cannot see an error along the
+    // epipolar line, and such a match pulls the update by its full reprojection error. OPRF's
+    // set 1 therefore also passes the individual-compatibility gate of its innovation under the
+    // prior (thesis Section 1.2.1.1), nu^T (H P_ss H^T + R)^-1 nu <= chi2_{2,1-a}, computed from
+    // the same linearization the update uses. Then line 8: update the filter with set 1.
+    const Linearizer lz(*ekf, ekf_rotation(*ekf), *cam);
+    const Mat6 Lss = pose_cholesky(pose_covariance(*ekf));
+    PoseInformation pi;
+    int32_t skipped = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        if (a.valid[i] == 0U || a.best[i] == 0U) continue;
+        Linearized lin;
+        double d2 = 0.0;
+        if (!lz.linearize(matches[i].obs, &lin)) {
+            ++skipped;
+            continue;
+        }
+        if (oprf && !passes_gate(a, lin, Lss, &d2)) {
+            a.best[i] = 0U;
+            a.best_stat[i] = static_cast<float>(std::fmin(d2, 3.0e38));
+            out->inliers_stage1 -= 1;
+            continue;
+        }
+        if (!pi.add(lin)) ++skipped;
+    }
+    out->update = sfd_ekf_update_info_t{};
+    out->update.used = pi.used;
+    out->update.skipped = skipped;
+    sfd_status_t st = apply_pose_information(ekf, pi, &out->update.nis);
+    out->update_status = st;
+    const bool rescue =
+        (a.params.method == SFD_METHOD_OPRF || a.params.method == SFD_METHOD_RANSAC1);
+    // Lines 9-12: rescore set 1's outliers under the updated filter; the rescued form set 2.
+    if (rescue && st == SFD_OK && out->inliers_stage1 > 0) {
+        const Score score = static_cast<Score>(a.score_kind);
+        const Mat3 R_post = ekf_rotation(*ekf);
+        const Vec3 p_post(ekf->p_IinW_m[0], ekf->p_IinW_m[1], ekf->p_IinW_m[2]);
+        CameraPose prev;
+        prev.R_WtoC = Eigen::Map<const Mat3>(a.prev_R_CtoW).transpose();
+        prev.p_CinW = Vec3(a.prev_p_CinW_m[0], a.prev_p_CinW_m[1], a.prev_p_CinW_m[2]);
+        const Model model = make_model(*cam, prev, R_post, p_post);
+        for (int32_t i = 0; i < n; ++i) a.rescued[i] = (a.best[i] == 0U) ? a.valid[i] : 0U;
+        int32_t count2 = score_all(&a, score, *cam, model, matches, n, a.rescued);
+        for (int32_t i = 0; i < n; ++i) {
+            a.rescued[i] = a.cur[i];
+            if (a.valid[i] != 0U && a.best[i] == 0U) a.best_stat[i] = a.cur_stat[i];
+        }
+        if (oprf && count2 > 0) {
+            count2 -= gate_innovations(&a, *ekf, *cam, matches, n, a.rescued);
+        }
+        out->inliers_stage2 = count2;
+        if (count2 > 0) {  // line 13: merge; set 2's update on top of set 1's
+            sfd_ekf_update_info_t info2{};
+            const MatchObs view{matches};
+            st = update_camera(ekf, *cam, view, a.rescued, n, &info2);
+            out->update_status = st;
+            out->update.used += info2.used;
+            out->update.skipped += info2.skipped;
+            out->update.nis += info2.nis;
+            for (int32_t i = 0; i < n; ++i) {
+                if (a.rescued[i] != 0U) a.best[i] = 1U;
+            }
+        }
+    }
+    write_verdicts(a, out);
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
+                                      const sfd_ekf_camera_t *cam, const double prev_R_CtoW[9],
+                                      const double prev_p_CinW_m[3], const sfd_match_t *matches,
+                                      int32_t n, sfd_assoc_result_t *out) {
+    const sfd_status_t st =
+        sfd_assoc_select(assoc, ekf, cam, prev_R_CtoW, prev_p_CinW_m, matches, n, out);
+    if (st != SFD_OK) return st;
+    return sfd_assoc_apply(assoc, ekf, cam, matches, n, out);
 }

@@ -111,32 +111,100 @@ bool project(const sfd_ekf_camera_t &cam, const CameraPose &pose, const Vec3 &p_
     return std::isfinite((*uv)(0)) && std::isfinite((*uv)(1));
 }
 
+Linearizer::Linearizer(const sfd_ekf_t &ekf, const Mat3 &R_ItoW, const sfd_ekf_camera_t &cam)
+    : fx(cam.fx_px),
+      fy(cam.fy_px),
+      cx(cam.cx_px),
+      cy(cam.cy_px),
+      sigma2(cam.pixel_sigma_px * cam.pixel_sigma_px) {
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+            RWI[3 * r + c] = R_ItoW(c, r);
+            RIC[3 * r + c] = cam.ext.R_CtoI[3 * c + r];
+        }
+        pI[r] = ekf.p_IinW_m[r];
+        pCI[r] = cam.ext.p_CinI[r];
+    }
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+            RWC[3 * r + c] =
+                RIC[3 * r] * RWI[c] + RIC[3 * r + 1] * RWI[3 + c] + RIC[3 * r + 2] * RWI[6 + c];
+        }
+        pC[r] = pI[r] + R_ItoW(r, 0) * pCI[0] + R_ItoW(r, 1) * pCI[1] + R_ItoW(r, 2) * pCI[2];
+    }
+}
+
+bool Linearizer::camera_point(const double L_W[3], double c[3]) const {
+    const double d0 = L_W[0] - pC[0], d1 = L_W[1] - pC[1], d2 = L_W[2] - pC[2];
+    c[0] = RWC[0] * d0 + RWC[1] * d1 + RWC[2] * d2;
+    c[1] = RWC[3] * d0 + RWC[4] * d1 + RWC[5] * d2;
+    c[2] = RWC[6] * d0 + RWC[7] * d1 + RWC[8] * d2;
+    return c[2] > 1e-6 && std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
+}
+
+bool Linearizer::linearize(const sfd_ekf_obs_t &obs, Linearized *out) const {
+    // y = R^T (L - p) (landmark in the IMU frame); c = R_CtoI^T (y - p_CinI).
+    const double *L = obs.landmark_W_m;
+    const double d0 = L[0] - pI[0], d1 = L[1] - pI[1], d2 = L[2] - pI[2];
+    const double y0 = RWI[0] * d0 + RWI[1] * d1 + RWI[2] * d2;
+    const double y1 = RWI[3] * d0 + RWI[4] * d1 + RWI[5] * d2;
+    const double y2 = RWI[6] * d0 + RWI[7] * d1 + RWI[8] * d2;
+    const double e0 = y0 - pCI[0], e1 = y1 - pCI[1], e2 = y2 - pCI[2];
+    const double c0 = RIC[0] * e0 + RIC[1] * e1 + RIC[2] * e2;
+    const double c1 = RIC[3] * e0 + RIC[4] * e1 + RIC[5] * e2;
+    const double c2 = RIC[6] * e0 + RIC[7] * e1 + RIC[8] * e2;
+    if (!(c2 > 1e-6) || !std::isfinite(c0) || !std::isfinite(c1) || !std::isfinite(c2)) {
+        return false;
+    }
+    // Jpi = [[a, 0, b], [0, e, f]] (pinhole derivative).
+    const double iz = 1.0 / c2;
+    const double a = fx * iz, b = -fx * c0 * iz * iz, e = fy * iz, f = -fy * c1 * iz * iz;
+    // B = Jpi R_CtoI^T (2x3): d pixel / d (point in the IMU frame).
+    double B[6];
+    for (int k = 0; k < 3; ++k) {
+        B[k] = a * RIC[k] + b * RIC[6 + k];
+        B[3 + k] = e * RIC[3 + k] + f * RIC[6 + k];
+    }
+    // JL = B R^T (d pixel / d L); H_p = -JL; H_theta = B [y]x.
+    double JL[6];
+    for (int r = 0; r < 2; ++r) {
+        const double *Br = &B[3 * r];
+        for (int k = 0; k < 3; ++k) {
+            JL[3 * r + k] = Br[0] * RWI[k] + Br[1] * RWI[3 + k] + Br[2] * RWI[6 + k];
+        }
+        out->H(r, 0) = -JL[3 * r];
+        out->H(r, 1) = -JL[3 * r + 1];
+        out->H(r, 2) = -JL[3 * r + 2];
+        // row of B times [y]x = (B1 y2 - B2 y1, B2 y0 - B0 y2, B0 y1 - B1 y0)
+        out->H(r, 3) = Br[1] * y2 - Br[2] * y1;
+        out->H(r, 4) = Br[2] * y0 - Br[0] * y2;
+        out->H(r, 5) = Br[0] * y1 - Br[1] * y0;
+    }
+    // R = sigma^2 I + JL C_L JL^T (C_L symmetrized).
+    const double *C = obs.landmark_cov_m2;
+    double JC[6];
+    for (int r = 0; r < 2; ++r) {
+        for (int k = 0; k < 3; ++k) {
+            double acc = 0.0;
+            for (int j = 0; j < 3; ++j) acc += JL[3 * r + j] * 0.5 * (C[3 * j + k] + C[3 * k + j]);
+            JC[3 * r + k] = acc;
+        }
+    }
+    const double r00 = JC[0] * JL[0] + JC[1] * JL[1] + JC[2] * JL[2] + sigma2;
+    const double r01 = JC[0] * JL[3] + JC[1] * JL[4] + JC[2] * JL[5];
+    const double r11 = JC[3] * JL[3] + JC[4] * JL[4] + JC[5] * JL[5] + sigma2;
+    out->R << r00, r01, r01, r11;
+    out->nu(0) = obs.uv_px[0] - (fx * c0 * iz + cx);
+    out->nu(1) = obs.uv_px[1] - (fy * c1 * iz + cy);
+    out->p_LinC << c0, c1, c2;
+    return std::isfinite(out->nu(0)) && std::isfinite(out->nu(1)) && std::isfinite(r00) &&
+           std::isfinite(r01) && std::isfinite(r11) && all_finite(out->H.data(), 12);
+}
+
 bool linearize(const sfd_ekf_t &ekf, const Mat3 &R_ItoW, const sfd_ekf_camera_t &cam,
                const sfd_ekf_obs_t &obs, Linearized *out) {
-    const Eigen::Map<const Mat3> R_CtoI(cam.ext.R_CtoI);
-    const Vec3 L = vec3(obs.landmark_W_m);
-    const Vec3 y = R_ItoW.transpose() * (L - vec3(ekf.p_IinW_m));  // landmark in the IMU frame
-    const Vec3 c = R_CtoI.transpose() * (y - vec3(cam.ext.p_CinI));
-    if (!(c.z() > 1e-6) || !all_finite(c.data(), 3)) return false;
-    const double iz = 1.0 / c.z();
-    Eigen::Matrix<double, 2, 3, Eigen::RowMajor> Jpi;
-    Jpi << cam.fx_px * iz, 0.0, -cam.fx_px * c.x() * iz * iz, 0.0, cam.fy_px * iz,
-        -cam.fy_px * c.y() * iz * iz;
-    // d c / d dp = -R_CtoI^T R^T ; d c / d dtheta = R_CtoI^T [y]x ; d c / d L = R_CtoI^T R^T.
-    const Mat3 dc_dL = R_CtoI.transpose() * R_ItoW.transpose();
-    const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> JL = Jpi * dc_dL;
-    out->H.block<2, 3>(0, 0) = -JL;
-    out->H.block<2, 3>(0, 3) = Jpi * (R_CtoI.transpose() * skew(y));
-    const Eigen::Map<const Mat3> CL(obs.landmark_cov_m2);
-    const double s2 = cam.pixel_sigma_px * cam.pixel_sigma_px;
-    out->R = JL * (0.5 * (CL + CL.transpose())) * JL.transpose();
-    out->R(0, 0) += s2;
-    out->R(1, 1) += s2;
-    out->nu(0) = obs.uv_px[0] - (cam.fx_px * c.x() * iz + cam.cx_px);
-    out->nu(1) = obs.uv_px[1] - (cam.fy_px * c.y() * iz + cam.cy_px);
-    out->p_LinC = c;
-    return all_finite(out->nu.data(), 2) && all_finite(out->H.data(), 12) &&
-           all_finite(out->R.data(), 4);
+    const Linearizer lz(ekf, R_ItoW, cam);
+    return lz.linearize(obs, out);
 }
 
 Mat6 pose_covariance(const sfd_ekf_t &ekf) {
@@ -416,45 +484,24 @@ void joseph(const MatN &P, const MatN6 &KHs, const MatN6 &U, MatN *out) {
 
 namespace sfd {
 
-template <typename View>
-sfd_status_t update_camera(sfd_ekf_t *ekf, const sfd_ekf_camera_t &cam_ref, const View &view,
-                           const uint8_t *use, int32_t n, sfd_ekf_update_info_t *info) {
-    if (n < 0 || n > SFD_MAX_FEATURES) return SFD_ERR_INVAL;
-    if (ekf->initialized != 1) return SFD_ERR_STATE;
-    const sfd_ekf_camera_t *cam = &cam_ref;
-    sfd_ekf_update_info_t local{};
-    sfd_ekf_update_info_t *out = (info != nullptr) ? info : &local;
-    *out = sfd_ekf_update_info_t{};
-    const Mat3 R_ItoW = ekf_rotation(*ekf);
-    // Information over the pose: Y = sum H^T R^-1 H, b = sum H^T R^-1 nu (eq. (19) regrouped).
-    Mat6 Y = Mat6::Zero();
-    Vec6 b = Vec6::Zero();
-    double nu_Rinv_nu = 0.0;
-    for (int32_t i = 0; i < n; ++i) {
-        if (use != nullptr && use[i] == 0U) continue;
-        Linearized lin;
-        const sfd_ekf_obs_t &o = view[i];
-        if (!all_finite(o.uv_px, 2) || !all_finite(o.landmark_W_m, 3) ||
-            !all_finite(o.landmark_cov_m2, 9) || !linearize(*ekf, R_ItoW, *cam, o, &lin)) {
-            out->skipped += 1;
-            continue;
-        }
-        const double det = lin.R(0, 0) * lin.R(1, 1) - lin.R(0, 1) * lin.R(1, 0);
-        if (!(det > 0.0) || !(lin.R(0, 0) > 0.0)) {
-            out->skipped += 1;
-            continue;
-        }
-        Mat2 Rinv;
-        Rinv << lin.R(1, 1) / det, -lin.R(0, 1) / det, -lin.R(1, 0) / det, lin.R(0, 0) / det;
-        const Eigen::Matrix<double, 6, 2> HtRinv = lin.H.transpose() * Rinv;
-        Y.noalias() += HtRinv * lin.H;
-        b.noalias() += HtRinv * lin.nu;
-        nu_Rinv_nu += lin.nu.dot(Rinv * lin.nu);
-        out->used += 1;
-    }
-    if (out->used == 0) return SFD_OK;
-    Y = 0.5 * (Y + Y.transpose());
+bool PoseInformation::add(const Linearized &lin) {
+    const double det = lin.R(0, 0) * lin.R(1, 1) - lin.R(0, 1) * lin.R(1, 0);
+    if (!(det > 0.0) || !(lin.R(0, 0) > 0.0)) return false;
+    Mat2 Rinv;
+    Rinv << lin.R(1, 1) / det, -lin.R(0, 1) / det, -lin.R(1, 0) / det, lin.R(0, 0) / det;
+    const Eigen::Matrix<double, 6, 2> HtRinv = lin.H.transpose() * Rinv;
+    Y.noalias() += HtRinv * lin.H;
+    b.noalias() += HtRinv * lin.nu;
+    nu_Rinv_nu += lin.nu.dot(Rinv * lin.nu);
+    used += 1;
+    return true;
+}
 
+sfd_status_t apply_pose_information(sfd_ekf_t *ekf, const PoseInformation &info_in,
+                                    double *nis_out) {
+    if (info_in.used == 0) return SFD_OK;
+    const Mat6 Y = 0.5 * (info_in.Y + info_in.Y.transpose());
+    const Vec6 &b = info_in.b;
     const CMapN P(ekf->P);
     const Mat6 Pss = pose_covariance(*ekf);
     MatN6 Pxs;
@@ -475,13 +522,37 @@ sfd_status_t update_camera(sfd_ekf_t *ekf, const sfd_ekf_camera_t &cam_ref, cons
     MatN Pn;
     joseph(P, KHs, U, &Pn);
     // NIS = nu^T S^-1 nu = nu^T R^-1 nu - b^T (P_ss^-1 + Y)^-1 b, with (P_ss^-1 + Y)^-1 = P_ss M.
-    const double nis = nu_Rinv_nu - b.dot(Pss * (M * b));
+    const double nis = info_in.nu_Rinv_nu - b.dot(Pss * (M * b));
     if (!all_finite(dx.data(), N) || !std::isfinite(nis) || !inject(ekf, dx, Pn)) {
         ekf->numeric_faults += 1U;
         return SFD_ERR_NUMERIC;
     }
-    out->nis = nis;
+    if (nis_out != nullptr) *nis_out = nis;
     return SFD_OK;
+}
+
+template <typename View>
+sfd_status_t update_camera(sfd_ekf_t *ekf, const sfd_ekf_camera_t &cam, const View &view,
+                           const uint8_t *use, int32_t n, sfd_ekf_update_info_t *info) {
+    if (n < 0 || n > SFD_MAX_FEATURES) return SFD_ERR_INVAL;
+    if (ekf->initialized != 1) return SFD_ERR_STATE;
+    sfd_ekf_update_info_t local{};
+    sfd_ekf_update_info_t *out = (info != nullptr) ? info : &local;
+    *out = sfd_ekf_update_info_t{};
+    const Linearizer lz(*ekf, ekf_rotation(*ekf), cam);
+    // Information over the pose: Y = sum H^T R^-1 H, b = sum H^T R^-1 nu (eq. (19) regrouped).
+    PoseInformation pi;
+    for (int32_t i = 0; i < n; ++i) {
+        if (use != nullptr && use[i] == 0U) continue;
+        Linearized lin;
+        const sfd_ekf_obs_t &o = view[i];
+        if (!all_finite(o.uv_px, 2) || !all_finite(o.landmark_W_m, 3) ||
+            !all_finite(o.landmark_cov_m2, 9) || !lz.linearize(o, &lin) || !pi.add(lin)) {
+            out->skipped += 1;
+        }
+    }
+    out->used = pi.used;
+    return apply_pose_information(ekf, pi, &out->nis);
 }
 
 template sfd_status_t update_camera<ObsArray>(sfd_ekf_t *, const sfd_ekf_camera_t &,

@@ -39,8 +39,25 @@ Mat3 ekf_rotation(const sfd_ekf_t &ekf);
 /// Camera pose of a given IMU pose.
 CameraPose camera_pose(const Mat3 &R_ItoW, const Vec3 &p_IinW, const sfd_extrinsics_t &ext);
 
+/// Per-frame constants of the camera measurement at one filter pose (eqs. (15), (22)), so that
+/// each observation costs about 100 multiplications (core/docs/ekf.md).
+struct Linearizer {
+    double RWI[9];  ///< R_ItoW^T, row-major
+    double RIC[9];  ///< R_CtoI^T, row-major
+    double pI[3];   ///< p_IinW
+    double pCI[3];  ///< p_CinI
+    double RWC[9];  ///< R_WtoC = R_CtoI^T R_ItoW^T, row-major
+    double pC[3];   ///< p_CinW
+    double fx, fy, cx, cy, sigma2;
+    Linearizer(const sfd_ekf_t &ekf, const Mat3 &R_ItoW, const sfd_ekf_camera_t &cam);
+    /// Landmark in the camera frame; false when not finite or not in front (z <= 1e-6 m).
+    bool camera_point(const double L_W[3], double c[3]) const;
+    /// Full linearization of @p obs; false as camera_point() or when a value is not finite.
+    bool linearize(const sfd_ekf_obs_t &obs, Linearized *out) const;
+};
+
 /// Linearizes @p obs at the filter's prior; false when the landmark is not in front of the
-/// camera (depth <= 1e-6 m) or a value is not finite.
+/// camera (depth <= 1e-6 m) or a value is not finite. (One-off; loops use a Linearizer.)
 bool linearize(const sfd_ekf_t &ekf, const Mat3 &R_ItoW, const sfd_ekf_camera_t &cam,
                const sfd_ekf_obs_t &obs, Linearized *out);
 
@@ -56,6 +73,22 @@ Mat6 pose_covariance(const sfd_ekf_t &ekf);
 /// False when H P_ss H^T + R is not positive definite.
 bool single_update_pose(const sfd_ekf_t &ekf, const Mat3 &R_ItoW, const Mat6 &P_ss,
                         const Linearized &lin, Mat3 *R_ItoW_out, Vec3 *p_IinW_out);
+
+/// Information of a set of observations over the pose (eq. (19) regrouped, core/docs/ekf.md):
+/// Y = sum H^T R^-1 H, b = sum H^T R^-1 nu, and sum nu^T R^-1 nu for the NIS.
+struct PoseInformation {
+    Mat6 Y = Mat6::Zero();
+    Vec6 b = Vec6::Zero();
+    double nu_Rinv_nu = 0.0;
+    int32_t used = 0;
+    /// Adds one linearized observation; false (nothing added) when its R is not PD.
+    bool add(const Linearized &lin);
+};
+
+/// The batch update of sfd_ekf_update_camera() from accumulated information: Joseph form, the
+/// filter unchanged on numerical trouble (SFD_ERR_NUMERIC, numeric_faults counted). Nothing to do
+/// (SFD_OK) when no observation was added. @p nis may be NULL.
+sfd_status_t apply_pose_information(sfd_ekf_t *ekf, const PoseInformation &info, double *nis);
 
 /// Observations in a plain array.
 struct ObsArray {

@@ -267,6 +267,41 @@ static void invalid_matches_are_untested_and_bad_arguments_rejected(void **state
                   SFD_ERR_STATE);
 }
 
+/* GIVEN a selection WHEN applying THEN select + apply equals sfd_assoc_run bit for bit; apply
+ * without a selection, with another match count, or after the filter moved is refused
+ * (SFD_ERR_STATE) and changes nothing. */
+static void select_then_apply_equals_run_and_checks_its_sequence(void **state) {
+    (void)state;
+    SFD_REQ("SFD-OPRF-009");
+    static sfd_assoc_t a1, a2;
+    static sfd_assoc_result_t r1, r2;
+    static sim_pair_t p1, p2;
+    sfd_assoc_params_t ap;
+    sfd_assoc_params_default(&ap);
+    const sim_pair_opts_t o = sim_pair_default_opts();
+    assert_int_equal(sim_pair_make(&p1, &o, 21), 0);
+    p2 = p1;
+    assert_status(sfd_assoc_init(&a1, &ap), SFD_OK);
+    assert_status(sfd_assoc_init(&a2, &ap), SFD_OK);
+    assert_status(
+        sfd_assoc_run(&a1, &p1.ekf, &p1.cam, p1.prev_R_CtoW, p1.prev_p_C, p1.m, p1.n, &r1), SFD_OK);
+    assert_status(sfd_assoc_apply(&a2, &p2.ekf, &p2.cam, p2.m, p2.n, &r2), SFD_ERR_STATE);
+    assert_status(
+        sfd_assoc_select(&a2, &p2.ekf, &p2.cam, p2.prev_R_CtoW, p2.prev_p_C, p2.m, p2.n, &r2),
+        SFD_OK);
+    /* the provisional verdicts are set 1: every match judged, none untested */
+    assert_int_equal(r2.num_consistent + r2.num_spurious, p2.n);
+    assert_status(sfd_assoc_apply(&a2, &p2.ekf, &p2.cam, p2.m, p2.n - 1, &r2), SFD_ERR_STATE);
+    sfd_ekf_t moved = p2.ekf;
+    moved.p_IinW_m[0] += 1e-9;
+    assert_status(sfd_assoc_apply(&a2, &moved, &p2.cam, p2.m, p2.n, &r2), SFD_ERR_STATE);
+    assert_status(sfd_assoc_apply(&a2, &p2.ekf, &p2.cam, p2.m, p2.n, &r2), SFD_OK);
+    assert_memory_equal(&r1, &r2, sizeof r1);
+    assert_memory_equal(&p1.ekf, &p2.ekf, sizeof p1.ekf);
+    /* a second apply needs a new selection */
+    assert_status(sfd_assoc_apply(&a2, &p2.ekf, &p2.cam, p2.m, p2.n, &r2), SFD_ERR_STATE);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(oprf_detects_random_outliers_and_improves_the_pose),
@@ -277,6 +312,7 @@ int main(void) {
         cmocka_unit_test(same_seed_gives_identical_verdicts),
         cmocka_unit_test(oprf_falls_back_to_rotation_only_without_translation),
         cmocka_unit_test(invalid_matches_are_untested_and_bad_arguments_rejected),
+        cmocka_unit_test(select_then_apply_equals_run_and_checks_its_sequence),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

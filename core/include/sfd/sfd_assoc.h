@@ -57,6 +57,15 @@ typedef struct {
     double noise_px2[SFD_MAX_FEATURES]; /**< per match: sigma^2 + landmark spread (px^2) */
     double x_prev[SFD_MAX_FEATURES][2]; /**< compacted inputs of the fundamental-matrix RANSAC */
     double x_curr[SFD_MAX_FEATURES][2];
+    /* between sfd_assoc_select() and sfd_assoc_apply() */
+    int32_t selected;      /**< 1 after select, 0 after apply */
+    int32_t n;             /**< matches of the selected frame */
+    int32_t score_kind;    /**< distance used by the selection (private) */
+    int8_t stage;          /**< SFD_STAGE_* of the method */
+    double prev_R_CtoW[9]; /**< previous camera pose of the selected frame */
+    double prev_p_CinW_m[3];
+    double prior_p_m[3]; /**< the prior select saw (apply checks it is unchanged) */
+    double prior_q[4];
     int32_t initialized;
 } sfd_assoc_t;
 
@@ -94,7 +103,34 @@ sfd_status_t sfd_assoc_params_from(const sfd_params_t *p, sfd_assoc_params_t *pa
 sfd_status_t sfd_assoc_init(sfd_assoc_t *assoc, const sfd_assoc_params_t *params);
 
 /**
- * @brief Judges the matches of one frame and updates the filter with the accepted ones.
+ * @brief Association proper, without touching the filter: validates every match at the prior,
+ *        then runs the method's selection (OPRF/RANSAC1: Table 1 lines 1-7; RANSACF: Table 2;
+ *        NONE: all valid). @p out holds the provisional verdicts (set 1).
+ *        Follow with sfd_assoc_apply() on the same matches and the unchanged filter. The split
+ *        lets a caller time association and update separately (SPEC SFD_TIMING stages).
+ * @return SFD_OK; SFD_ERR_STATE when @p assoc or @p ekf is not initialized; SFD_ERR_INVAL for
+ *         null pointers, n outside [0, SFD_MAX_FEATURES] or a non-finite previous pose.
+ */
+sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ekf, const sfd_ekf_camera_t *cam,
+                              const double prev_R_CtoW[9], const double prev_p_CinW_m[3],
+                              const sfd_match_t *matches, int32_t n, sfd_assoc_result_t *out);
+
+/**
+ * @brief Completes a selection: OPRF's individual-compatibility gate on set 1 (an sfd addition,
+ *        computed from the linearization the update needs anyway), the filter update with set 1
+ *        (Table 1 line 8), then for OPRF and
+ *        RANSAC1 rescores set 1's outliers under the updated filter (lines 9-12) and updates with
+ *        the rescued set 2 (line 13). @p out receives the final verdicts.
+ * @return SFD_OK (EKF trouble is reported in out->update_status, verdicts stay valid);
+ *         SFD_ERR_STATE without a preceding select, when @p n differs from the selection's, or
+ *         when the filter changed since the selection; SFD_ERR_INVAL for null pointers.
+ */
+sfd_status_t sfd_assoc_apply(sfd_assoc_t *assoc, sfd_ekf_t *ekf, const sfd_ekf_camera_t *cam,
+                             const sfd_match_t *matches, int32_t n, sfd_assoc_result_t *out);
+
+/**
+ * @brief sfd_assoc_select() then sfd_assoc_apply(): judges the matches of one frame and updates
+ *        the filter with the accepted ones.
  *
  * @p ekf holds the prior at the current frame (propagated by the IMU); on return it holds the
  * posterior (unless the update failed, see update_status). @p prev_R_CtoW / @p prev_p_CinW_m
