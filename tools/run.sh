@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: MIT
 # README command (1): set up, build, and run the main job on its built-in default, a simulated
 # flight: the paper's UAV scenario through the parity-space detector (sfd-sim paper-uav), the
-# isolation comparison on a simulated flight with mistracks (sfd-sim isolation), and their plots.
+# isolation comparison on a simulated flight with mistracks (sfd-sim isolation), and their plots;
+# then the thesis's EKF loop (sfd-sim thesis-loop --quick) and its Figures 4-9.
 # Results: the tables printed here, CSV and PNG files in out/ (or $SFD_OUT).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -33,3 +34,9 @@ PY
 done
 echo
 .venv/bin/python tools/plot_paper.py "$out"
+echo
+# Kilic 2014 Chapter IV: the association methods in an EKF localization loop, small sweep (~5 s).
+# The full sweep (README): sfd-sim thesis-loop --csv-dir DIR (about 2 minutes).
+mkdir -p "$out/thesis"
+./build/host/apps/sfd-sim thesis-loop --quick --csv-dir "$out/thesis"
+.venv/bin/python tools/plot_thesis.py "$out/thesis"

@@ -22,6 +22,7 @@
 
 #include "flight_log.hpp"
 #include "paper_uav.hpp"
+#include "thesis_loop.hpp"
 #include "sfd/sfd.h"
 
 namespace {
@@ -45,6 +46,8 @@ struct Options {
     double depth_var = 0.0;
     double pixel_noise = 1.0;
     int truth_window = 2;
+    int runs = -1;  // scenario default
+    bool quick = false;
 };
 
 void usage(FILE *out) {
@@ -64,12 +67,20 @@ void usage(FILE *out) {
         "              detection probability, simulated flight with mistracks\n"
         "  uav-imu     gyro integration and IMU-predicted pixel motion over the paper's\n"
         "              flight (camera model + gyro integration check)\n"
+        "  thesis-loop Kilic 2014 Chapter IV: OPRF, 1-point RANSAC, F-matrix RANSAC and no\n"
+        "              association in an EKF localization loop (ground-truth loop, map,\n"
+        "              200 Hz IMU, 20 Hz camera); sweeps of measurement noise, IMU (control\n"
+        "              input) noise and mismatch ratio; association time and position RMSE\n"
+        "              per method (Figures 4-9): thesis_rmse.csv, thesis_time.csv\n"
         "Options:\n"
         "  --seed N            PRNG seed (default 1)\n"
         "  --windows N         paper-uav: Monte Carlo windows per case (10000)\n"
         "  --window-frames L   paper-uav: window length (2, the paper's)\n"
         "  --group-size n      paper-uav: group size (3)\n"
-        "  --frames N          isolation / uav-imu: frames at 20 Hz (200)\n"
+        "  --frames N          isolation / uav-imu: frames at 20 Hz (200); thesis-loop:\n"
+        "                      frames per run (800 = one 40 s loop; --quick 200)\n"
+        "  --runs N            thesis-loop: Monte Carlo runs per sweep point (5; --quick 2)\n"
+        "  --quick             thesis-loop: two levels per sweep (5/20, 0/10, 0/30 %%)\n"
         "  --features N        isolation / uav-imu: features (240 / 200, max %d)\n"
         "  --outlier-ratio R   isolation: fraction of spurious features (0.1)\n"
         "  --jump-px P         isolation: mistrack jump (8 px)\n"
@@ -83,6 +94,7 @@ void usage(FILE *out) {
         "                      windows that mix the old and new point, L - 1 (2)\n"
         "Exit: 0 ok, 2 bad usage, 1 internal failure.\n",
         SFD_MAX_FEATURES);
+    sfdsim::thesis_loop_help(out);
 }
 
 bool parse_int(const char *s, long lo, long hi, long *out) {
@@ -349,6 +361,14 @@ int main(int argc, char **argv) {
                 return 2;
             }
             opt.truth_window = static_cast<int>(v);
+        } else if (!std::strcmp(a, "--runs") && i + 1 < argc) {
+            if (!parse_int(argv[++i], 1, 10000, &v)) {
+                std::fprintf(stderr, "sfd-sim: --runs: expected 1..10000, got %s\n", argv[i]);
+                return 2;
+            }
+            opt.runs = static_cast<int>(v);
+        } else if (!std::strcmp(a, "--quick")) {
+            opt.quick = true;
         } else if (!std::strcmp(a, "--csv-dir") && i + 1 < argc) {
             opt.csv_dir = argv[++i];
         } else if (a[0] != '-' && opt.scenario == nullptr) {
@@ -412,8 +432,18 @@ int main(int argc, char **argv) {
         if (opt.features < 0) opt.features = 200;
         return run_uav_imu(opt);
     }
+    if (!std::strcmp(opt.scenario, "thesis-loop")) {
+        sfdsim::ThesisOptions to;
+        to.seed = opt.seed;
+        to.quick = opt.quick;
+        to.frames = opt.frames > 0 ? opt.frames : (opt.quick ? 200 : 800);
+        to.runs = opt.runs > 0 ? opt.runs : (opt.quick ? 2 : 5);
+        to.out_dir = opt.csv_dir ? opt.csv_dir : "";
+        return sfdsim::run_thesis_loop(to);
+    }
     std::fprintf(stderr,
-                 "sfd-sim: unknown scenario: %s (available: paper-uav, isolation, uav-imu)\n",
+                 "sfd-sim: unknown scenario: %s (available: paper-uav, isolation, uav-imu, "
+                 "thesis-loop)\n",
                  opt.scenario);
     return 2;
 }

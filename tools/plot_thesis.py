@@ -1,0 +1,105 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""Plots of `sfd-sim thesis-loop --csv-dir DIR` (Kilic 2014, Chapter IV, Figures 4-9).
+
+usage: plot_thesis.py DIR    reads DIR/thesis_rmse.csv and DIR/thesis_time.csv, writes
+                             DIR/thesis_fig4.png ... thesis_fig9.png:
+  fig4 time vs measurement noise     fig5 position RMSE vs measurement noise
+  fig6 time vs control input noise   fig7 position RMSE vs control input noise
+  fig8 time vs mismatch ratio        fig9 position RMSE vs mismatch ratio
+Time = wall clock of sfd_assoc_run per frame (association + EKF update), mean (solid) and
+median (dotted). The thesis's ranges are shaded. Lines starting with '#' in the CSVs (the unit
+definitions) are skipped.
+"""
+import csv
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use('Agg')
+import matplotlib.pyplot as plt  # noqa: E402
+
+METHODS = (('OPRF', 'tab:blue', 'o', 'OPRF (1-point RANSAC, epipolar)'),
+           ('RANSAC1', 'tab:green', 's', '1-point RANSAC (reprojection)'),
+           ('RANSACF', 'tab:red', '^', 'F-matrix RANSAC (Table 2)'),
+           ('NONE', 'tab:gray', 'x', 'no association'))
+SWEEPS = (  # sweep, thesis range, x label, figure numbers (time, RMSE)
+    ('measurement', (5, 20), 'measurement noise (%: pixel σ = p/100 · 10 px)', 4, 5),
+    ('control', (0, 10), 'control input noise (%: IMU σ = p/100 · RMS true signal)', 6, 7),
+    ('mismatch', (5, 20), 'matching error (% of matches mismatched)', 8, 9),
+)
+
+
+def read(path):
+    with open(path, newline='', encoding='utf-8') as fh:
+        return list(csv.DictReader(line for line in fh if not line.startswith('#')))
+
+
+def units(path):
+    with open(path, encoding='utf-8') as fh:
+        for line in fh:
+            if line.startswith('# units:'):
+                return line[len('# units:'):].strip()
+    return ''
+
+
+def figure(d, rows, sweep, rng, xlabel, num, kind):
+    fig, ax = plt.subplots(figsize=(7, 4.6))
+    ax.axvspan(rng[0], rng[1], color='0.92', zorder=0, label="thesis's range")
+    for name, colour, marker, label in METHODS:
+        pts = sorted((r for r in rows if r['sweep'] == sweep and r['method'] == name),
+                     key=lambda r: float(r['level_pct']))
+        if not pts:
+            continue
+        x = [float(r['level_pct']) for r in pts]
+        if kind == 'time':
+            ax.plot(x, [float(r['time_mean_us']) for r in pts], '-', marker=marker, c=colour,
+                    label=label)
+            ax.plot(x, [float(r['time_median_us']) for r in pts], ':', c=colour, lw=1)
+        else:
+            y = [1e3 * float(r['rmse_m']) for r in pts]
+            e = [2e3 * float(r['rmse_se_m']) for r in pts]
+            ax.errorbar(x, y, yerr=e, fmt='-', marker=marker, c=colour, capsize=2, label=label)
+    title = {'time': 'association time (mean solid, median dotted)',
+             'rmse': 'error in position (±2 SE)'}[kind]
+    ax.set_title(f'Figure {num}: {title} vs {sweep}', fontsize=10)
+    ax.set_xlabel(xlabel)
+    if kind == 'time':
+        ax.set_ylabel('time per frame (µs), sfd_assoc_run incl. EKF update')
+        ax.set_yscale('log')
+    else:
+        ax.set_ylabel('EKF position RMSE (mm)')
+        ax.set_yscale('log')
+    ax.grid(alpha=0.3, which='both')
+    ax.legend(loc='best', fontsize=8)
+    fig.tight_layout()
+    out = os.path.join(d, f'thesis_fig{num}.png')
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def main():
+    if len(sys.argv) != 2 or sys.argv[1] in ('-h', '--help'):
+        print(__doc__)
+        return 0 if len(sys.argv) == 2 else 2
+    d = sys.argv[1]
+    rmse_csv = os.path.join(d, 'thesis_rmse.csv')
+    time_csv = os.path.join(d, 'thesis_time.csv')
+    if not (os.path.exists(rmse_csv) and os.path.exists(time_csv)):
+        print(f'plot_thesis.py: no thesis_rmse.csv / thesis_time.csv in {d}', file=sys.stderr)
+        return 2
+    rmse, times = read(rmse_csv), read(time_csv)
+    made = []
+    for sweep, rng, xlabel, fig_time, fig_rmse in SWEEPS:
+        made.append(figure(d, times, sweep, rng, xlabel, fig_time, 'time'))
+        made.append(figure(d, rmse, sweep, rng, xlabel, fig_rmse, 'rmse'))
+    for m in sorted(made):
+        print(f'wrote {m}')
+    print(f'units: {units(rmse_csv)}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
