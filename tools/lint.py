@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """Static analysis over compile_commands.json: `lint.py clang-tidy BUILD` or `lint.py cppcheck BUILD`.
+Optional trailing arguments restrict the run to files whose path contains one of them (a quick
+check of the files you changed: `lint.py clang-tidy build/host core/src/ekf.cpp`).
 
 Scope: the project's own translation units (core/, drivers/, apps/, tests/); generated code in the
 build tree and third-party headers are not analysed. GCC-only flags (-fcallgraph-info, -fstack-usage)
@@ -39,12 +41,15 @@ def load(build, root):
 
 
 def main():
-    if len(sys.argv) != 3 or sys.argv[1] not in ('clang-tidy', 'cppcheck'):
+    if len(sys.argv) < 3 or sys.argv[1] not in ('clang-tidy', 'cppcheck'):
         print(__doc__)
         return 2
     tool, build = sys.argv[1], os.path.abspath(sys.argv[2])
+    only = sys.argv[3:]  # optional: analyse only files whose path contains one of these
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     entries = load(build, root)
+    if only:
+        entries = [e for e in entries if any(o in e['file'] for o in only)]
     if not entries:
         print('lint: no translation units found')
         return 1

@@ -318,14 +318,20 @@ extern "C" sfd_status_t sfd_assoc_init(sfd_assoc_t *assoc, const sfd_assoc_param
 
 namespace {
 
-bool same_prior(const sfd_assoc_t &a, const sfd_ekf_t &ekf) {
-    for (int k = 0; k < 3; ++k) {
-        if (std::memcmp(&a.prior_p_m[k], &ekf.p_IinW_m[k], sizeof(double)) != 0) return false;
-    }
-    for (int k = 0; k < 4; ++k) {
-        if (std::memcmp(&a.prior_q[k], &ekf.q_ItoW[k], sizeof(double)) != 0) return false;
+/// Bit-for-bit equality of doubles (the filter untouched since select, NaN payloads included).
+bool same_bits(const double *x, const double *y, int n) {
+    for (int k = 0; k < n; ++k) {
+        std::uint64_t bx = 0;
+        std::uint64_t by = 0;
+        std::memcpy(&bx, &x[k], sizeof bx);
+        std::memcpy(&by, &y[k], sizeof by);
+        if (bx != by) return false;
     }
     return true;
+}
+
+bool same_prior(const sfd_assoc_t &a, const sfd_ekf_t &ekf) {
+    return same_bits(a.prior_p_m, ekf.p_IinW_m, 3) && same_bits(a.prior_q, ekf.q_ItoW, 4);
 }
 
 void write_verdicts(const sfd_assoc_t &a, sfd_assoc_result_t *out) {

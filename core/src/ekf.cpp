@@ -126,9 +126,10 @@ Linearizer::Linearizer(const sfd_ekf_t &ekf, const Mat3 &R_ItoW, const sfd_ekf_c
         pCI[r] = cam.ext.p_CinI[r];
     }
     for (int r = 0; r < 3; ++r) {
+        const int row = 3 * r;
         for (int c = 0; c < 3; ++c) {
-            RWC[3 * r + c] =
-                RIC[3 * r] * RWI[c] + RIC[3 * r + 1] * RWI[3 + c] + RIC[3 * r + 2] * RWI[6 + c];
+            RWC[row + c] =
+                RIC[row] * RWI[c] + RIC[row + 1] * RWI[3 + c] + RIC[row + 2] * RWI[6 + c];
         }
         pC[r] = pI[r] + R_ItoW(r, 0) * pCI[0] + R_ItoW(r, 1) * pCI[1] + R_ItoW(r, 2) * pCI[2];
     }
@@ -168,13 +169,14 @@ bool Linearizer::linearize(const sfd_ekf_obs_t &obs, Linearized *out) const {
     // JL = B R^T (d pixel / d L); H_p = -JL; H_theta = B [y]x.
     double JL[6];
     for (int r = 0; r < 2; ++r) {
-        const double *Br = &B[3 * r];
+        const int row = 3 * r;
+        const double *Br = &B[row];
         for (int k = 0; k < 3; ++k) {
             JL[3 * r + k] = Br[0] * RWI[k] + Br[1] * RWI[3 + k] + Br[2] * RWI[6 + k];
         }
-        out->H(r, 0) = -JL[3 * r];
-        out->H(r, 1) = -JL[3 * r + 1];
-        out->H(r, 2) = -JL[3 * r + 2];
+        out->H(r, 0) = -JL[row];
+        out->H(r, 1) = -JL[row + 1];
+        out->H(r, 2) = -JL[row + 2];
         // row of B times [y]x = (B1 y2 - B2 y1, B2 y0 - B0 y2, B0 y1 - B1 y0)
         out->H(r, 3) = Br[1] * y2 - Br[2] * y1;
         out->H(r, 4) = Br[2] * y0 - Br[0] * y2;
