@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Landmark map: fixed-capacity table of 3-D landmarks keyed by track id, initialized from a ray
-// and a depth prior and refined by a gated 3x3 EKF update. Derivations: core/docs/landmark_map.md.
+// and a depth prior and refined by a gated, iterated 3x3 EKF update.
+// Derivations: core/docs/landmark_map.md.
 #include "core_private.hpp"
 #include "ekf.hpp"
 #include "rotation.hpp"

@@ -94,10 +94,13 @@ int32_t sfd_landmark_find(const sfd_landmark_map_t *map, int64_t track_id);
  * @brief Initializes (or re-initializes, when the track already has one) a track's landmark from
  *        one observation and a depth prior:
  *          p_W = p_CinW + d R r,  r = (xn, yn, 1)  (d along the optical axis),
- *          C = sd2 (R r)(R r)^T + d^2 s^2 R diag(1, 1, 0) R^T + J_pose C_pose J_pose^T,
+ *          C = sd2 (R r)(R r)^T + (d^2 + sd2) s^2 R diag(1, 1, 0) R^T
+ *              + J_pose C_pose J_pose^T + sd2 (R [r]x) C_theta (R [r]x)^T,
  *        the depth variance along the ray (dp/dd = R r), the bearing noise on the two image axes
- *        (dp/dxn = d R [e1 e2]), and the camera pose uncertainty through
- *        J_pose = [ I3 | -d R [r]x ] over (dp, dtheta). PD when sd2 > 0 and s > 0.
+ *        (dp/dxn = d R [e1 e2]; d^2 + sd2 = E[d^2], the exact second moment of the product of
+ *        independent depth and bearing errors), and the camera pose uncertainty through
+ *        J_pose = [ I3 | -d R [r]x ] over (dp, dtheta), plus its depth-rotation product.
+ *        PD when sd2 > 0 and s > 0.
  *        When the map is full, the least recently seen landmark is evicted if it was last seen
  *        before @p utime (ties: the lowest index); landmarks seen at @p utime or later are
  *        never evicted. Cost: O(1) average; O(SFD_MAX_LANDMARKS) when it evicts.
