@@ -12,7 +12,9 @@
 
 /* One detector's worth of state: everything a caller instantiates per camera. Grows as the
  * detectors land (parity window, EKF, OPRF scratch). */
-#define SFD_STATE_TOTAL (sizeof(sfd_parity_t) + sizeof(sfd_extrinsics_t) + sizeof(sfd_prng_t))
+#define SFD_STATE_TOTAL                                                     \
+    (sizeof(sfd_parity_t) + sizeof(sfd_extrinsics_t) + sizeof(sfd_prng_t) + \
+     sizeof(sfd_landmark_map_t))
 
 _Static_assert(SFD_MAX_FEATURES != 256 || SFD_MAX_WINDOW != 5 ||
                    SFD_STATE_TOTAL <= SFD_STATE_BUDGET_BYTES,
@@ -22,8 +24,9 @@ _Static_assert(SFD_MAX_FEATURES != 256 || SFD_MAX_WINDOW != 5 ||
 int main(void) {
     printf(
         "capacities: SFD_MAX_FEATURES=%d SFD_MAX_WINDOW=%d SFD_MAX_GROUP=%d "
-        "SFD_MAX_HYPOTHESES=%d SFD_CHI2_MAX_DOF=%d\n",
-        SFD_MAX_FEATURES, SFD_MAX_WINDOW, SFD_MAX_GROUP, SFD_MAX_HYPOTHESES, SFD_CHI2_MAX_DOF);
+        "SFD_MAX_HYPOTHESES=%d SFD_CHI2_MAX_DOF=%d SFD_MAX_LANDMARKS=%d\n",
+        SFD_MAX_FEATURES, SFD_MAX_WINDOW, SFD_MAX_GROUP, SFD_MAX_HYPOTHESES, SFD_CHI2_MAX_DOF,
+        SFD_MAX_LANDMARKS);
     printf("%-22s %8zu B\n", "sfd_params_t", sizeof(sfd_params_t));
     printf("%-22s %8zu B\n", "sfd_camera_t", sizeof(sfd_camera_t));
     printf("%-22s %8zu B\n", "sfd_extrinsics_t", sizeof(sfd_extrinsics_t));
@@ -32,6 +35,8 @@ int main(void) {
     printf("%-22s %8zu B\n", "sfd_imu_sample_t", sizeof(sfd_imu_sample_t));
     printf("%-22s %8zu B (window of %d frames x %d features)\n", "sfd_parity_t",
            sizeof(sfd_parity_t), SFD_MAX_WINDOW, SFD_MAX_FEATURES);
+    printf("%-22s %8zu B (%d landmarks)\n", "sfd_landmark_map_t", sizeof(sfd_landmark_map_t),
+           SFD_MAX_LANDMARKS);
     printf("%-22s %8zu B (caller's input frame)\n", "sfd_frame_t", sizeof(sfd_frame_t));
     printf("%-22s %8zu B (caller's output)\n", "sfd_verdict_t", sizeof(sfd_verdict_t));
     const size_t total = SFD_STATE_TOTAL;

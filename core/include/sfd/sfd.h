@@ -19,6 +19,7 @@
 #include "sfd_config.h"
 #include "sfd_fundamental.h"
 #include "sfd_imu.h"
+#include "sfd_landmarks.h"
 #include "sfd_params.h"
 #include "sfd_parity.h"
 #include "sfd_assoc.h"

@@ -8,7 +8,8 @@
  * window of observations, roughly
  *     SFD_MAX_FEATURES * SFD_MAX_WINDOW * 48 bytes  (pixels, normalized coordinates, depth prior)
  *   + SFD_MAX_FEATURES * 64 bytes                    (per-track bookkeeping)
- * i.e. ~74 KiB for 256 features and L = 5; SPEC's budget for that case is 256 KiB, checked by
+ * i.e. ~74 KiB for 256 features and L = 5, plus the landmark map (~70 KiB at the default
+ * SFD_MAX_LANDMARKS = 512); SPEC's budget for that case is 256 KiB, checked by
  * the `proof.state_sizes` test. Stack per call is bounded separately (`proof.stack_usage`).
  */
 #ifndef SFD_CONFIG_H
@@ -41,6 +42,20 @@
 #define SFD_CHI2_MAX_DOF 64
 #endif
 
+/** Landmarks the node's map holds (sfd_landmarks.h): one per live track, with room for tracks
+ *  that drop out and come back. Cost: 128 bytes per landmark plus 12 bytes of index, i.e.
+ *  ~70 KiB at the default 512; find/insert/remove are O(1) on average and O(SFD_MAX_LANDMARKS)
+ *  in the worst case. */
+#ifndef SFD_MAX_LANDMARKS
+#define SFD_MAX_LANDMARKS (2 * SFD_MAX_FEATURES)
+#endif
+
+/** Most linearizations of one landmark refinement (iterated EKF, sfd_landmark_refine); 1 is the
+ *  plain EKF. Cost: bounded time only (a 3x3 update each, ~300 flops). */
+#ifndef SFD_LANDMARK_REFINE_ITERATIONS
+#define SFD_LANDMARK_REFINE_ITERATIONS 5
+#endif
+
 /** Newton iterations used to invert a lens distortion model (fixed, not a tolerance loop). */
 #ifndef SFD_UNDISTORT_ITERATIONS
 #define SFD_UNDISTORT_ITERATIONS 12
@@ -53,6 +68,12 @@
 
 #if SFD_MAX_FEATURES < 1 || SFD_MAX_WINDOW < 2 || SFD_MAX_GROUP < 1 || SFD_MAX_HYPOTHESES < 1
 #error "sfd_config.h: capacities out of range"
+#endif
+#if SFD_LANDMARK_REFINE_ITERATIONS < 1 || SFD_LANDMARK_REFINE_ITERATIONS > 100
+#error "sfd_config.h: SFD_LANDMARK_REFINE_ITERATIONS must be in [1, 100]"
+#endif
+#if SFD_MAX_LANDMARKS < 1 || SFD_MAX_LANDMARKS > 1048576
+#error "sfd_config.h: SFD_MAX_LANDMARKS must be in [1, 2^20]"
 #endif
 #if SFD_CHI2_MAX_DOF < 1 || SFD_CHI2_MAX_DOF > 512
 #error "sfd_config.h: SFD_CHI2_MAX_DOF must be in [1, 512]"
