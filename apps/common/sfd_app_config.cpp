@@ -8,9 +8,7 @@
 namespace sfdapp {
 
 AppConfig::AppConfig() {
-    sfd_params_default(&node.params);
-    node.camera_id = -1;
-    node.publish_timing = 1;
+    sfd_node_config_default(&node);
 }
 
 bool set_method(const std::string &name, AppConfig *cfg, std::string *error) {
@@ -18,11 +16,14 @@ bool set_method(const std::string &name, AppConfig *cfg, std::string *error) {
         cfg->node.params.method = SFD_METHOD_NONE;
     } else if (name == "parity") {
         cfg->node.params.method = SFD_METHOD_PARITY;
-    } else if (name == "oprf" || name == "ransac1" || name == "ransacf" || name == "both") {
-        *error = "method " + name +
-                 " is not in this build yet (arrives with the EKF); available: "
-                 "none, parity";
-        return false;
+    } else if (name == "oprf") {
+        cfg->node.params.method = SFD_METHOD_OPRF;
+    } else if (name == "ransac1") {
+        cfg->node.params.method = SFD_METHOD_RANSAC1;
+    } else if (name == "ransacf") {
+        cfg->node.params.method = SFD_METHOD_RANSACF;
+    } else if (name == "both") {
+        cfg->node.params.method = SFD_METHOD_BOTH;
     } else {
         *error = "unknown method " + name + " (none, parity, oprf, ransac1, ransacf, both)";
         return false;
@@ -94,7 +95,11 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
                                                 "camera_id",
                                                 "publish_timing",
                                                 "lcm_url",
-                                                "channels"};
+                                                "channels",
+                                                "max_hypotheses",
+                                                "ransac_confidence",
+                                                "seed",
+                                                "filter"};
     for (const std::string &key : root.keys()) {
         if (known.count(key) == 0) {
             *error = path;
@@ -120,7 +125,8 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
     } nums[] = {{"false_alarm_rate", &p.false_alarm_rate},
                 {"pixel_sigma_px", &p.pixel_sigma_px},
                 {"default_depth_m", &p.default_depth_m},
-                {"default_depth_var_m2", &p.default_depth_var_m2}};
+                {"default_depth_var_m2", &p.default_depth_var_m2},
+                {"ransac_confidence", &p.ransac_confidence}};
     for (const NumKey &k : nums) {
         if (root[k.name].empty()) continue;
         if (!read_number(root[k.name], where(k.name), &d, error)) return false;
@@ -134,6 +140,7 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
                 {"translation_known", &p.translation_known},
                 {"exact_depth_covariance", &p.exact_depth_covariance},
                 {"parity_isolation", &p.parity_isolation},
+                {"max_hypotheses", &p.max_hypotheses},
                 {"publish_timing", &cfg->node.publish_timing}};
     for (const IntKey &k : ints) {
         if (root[k.name].empty()) continue;
@@ -159,6 +166,61 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
             p.gyro_bias_rad_s[k] = d;
         }
     }
+    if (!root["seed"].empty()) {
+        if (!read_int(root["seed"], where("seed"), &i, error)) return false;
+        if (i < 0) {
+            *error = where("seed") + ": expected a non-negative integer";
+            return false;
+        }
+        p.seed = static_cast<uint64_t>(i);
+    }
+    const cv::FileNode flt = root["filter"];
+    if (!flt.empty()) {
+        if (!flt.isMap()) {
+            *error = where("filter") + ": expected a map";
+            return false;
+        }
+        sfd_nav_config_t &nv = cfg->node.nav;
+        struct FKey {
+            const char *name;
+            double *dst;
+        } fnums[] = {{"gyro_noise_rad_s_rthz", &nv.noise.gyro_noise_rad_s_rthz},
+                     {"accel_noise_m_s2_rthz", &nv.noise.accel_noise_m_s2_rthz},
+                     {"gyro_bias_rw_rad_s2_rthz", &nv.noise.gyro_bias_rw_rad_s2_rthz},
+                     {"accel_bias_rw_m_s3_rthz", &nv.noise.accel_bias_rw_m_s3_rthz},
+                     {"gravity_m_s2", &nv.noise.gravity_m_s2},
+                     {"init_rest_s", &nv.init_rest_s},
+                     {"landmark_depth_var_m2", &nv.landmark_depth_var_m2},
+                     {"landmark_max_age_s", &nv.landmark_max_age_s},
+                     {"landmark_gate_alpha", &nv.landmark_gate_alpha},
+                     {"min_parallax_px", &nv.min_parallax_px}};
+        const char *fints[] = {"enabled", "gyro_bias_at_rest", "init_from_truth"};
+        int32_t *fint_dst[] = {&nv.enabled, &nv.gyro_bias_at_rest, &nv.init_from_truth};
+        for (const std::string &key : flt.keys()) {
+            bool found = false;
+            for (const FKey &k : fnums) found = found || key == k.name;
+            for (const char *k : fints) found = found || key == k;
+            if (!found) {
+                *error = where("filter");
+                error->append(": unknown key ").append(key);
+                return false;
+            }
+        }
+        for (const FKey &k : fnums) {
+            if (flt[k.name].empty()) continue;
+            if (!read_number(flt[k.name], where(std::string("filter.") + k.name), &d, error)) {
+                return false;
+            }
+            *k.dst = d;
+        }
+        for (int k = 0; k < 3; ++k) {
+            if (flt[fints[k]].empty()) continue;
+            if (!read_int(flt[fints[k]], where(std::string("filter.") + fints[k]), &i, error)) {
+                return false;
+            }
+            *fint_dst[k] = i;
+        }
+    }
     if (!root["lcm_url"].empty() &&
         !read_string(root["lcm_url"], where("lcm_url"), &cfg->lcm_url, error)) {
         return false;
@@ -169,20 +231,20 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
             *error = where("channels") + ": expected a map";
             return false;
         }
-        std::string *dst[] = {&cfg->channels.imu, &cfg->channels.camera_info,
+        std::string *dst[] = {&cfg->channels.imu,      &cfg->channels.camera_info,
                               &cfg->channels.features, &cfg->channels.verdict,
-                              &cfg->channels.timing};
-        const char *names[] = {"imu", "camera_info", "features", "verdict", "timing"};
+                              &cfg->channels.timing,   &cfg->channels.state};
+        const char *names[] = {"imu", "camera_info", "features", "verdict", "timing", "state"};
         for (const std::string &key : ch.keys()) {
             bool found = false;
-            for (int k = 0; k < 5; ++k) found = found || key == names[k];
+            for (int k = 0; k < 6; ++k) found = found || key == names[k];
             if (!found) {
                 *error = where("channels");
                 error->append(": unknown key ").append(key);
                 return false;
             }
         }
-        for (int k = 0; k < 5; ++k) {
+        for (int k = 0; k < 6; ++k) {
             if (ch[names[k]].empty()) continue;
             if (!read_string(ch[names[k]], where(std::string("channels.") + names[k]), dst[k],
                              error)) {

@@ -16,6 +16,7 @@ struct Channels {
     std::string features = "FEATURES";
     std::string verdict = "SFD_VERDICT";
     std::string timing = "SFD_TIMING";
+    std::string state = "SFD_STATE";
 };
 
 struct AppConfig {

@@ -43,8 +43,9 @@ sfd_node_t g_node;  // ~0.3 MiB: static, allocated at load time, not on the heap
 
 void on_publish(void *ctx, sfd_node_output_t kind, const void *data, int32_t size, int64_t) {
     Node *app = static_cast<Node *>(ctx);
-    const std::string &ch =
-        kind == SFD_NODE_OUT_VERDICT ? app->cfg.channels.verdict : app->cfg.channels.timing;
+    const std::string &ch = kind == SFD_NODE_OUT_VERDICT ? app->cfg.channels.verdict
+                            : kind == SFD_NODE_OUT_STATE ? app->cfg.channels.state
+                                                         : app->cfg.channels.timing;
     const unsigned long long h0 = app->heap_count ? app->heap_count() : 0;
     if (lcm_publish(app->lcm, ch.c_str(), data, static_cast<unsigned int>(size)) != 0) {
         ++app->publish_failures;
@@ -161,8 +162,21 @@ int main(int argc, char **argv) {
     std::printf("sfd-node %d.%d: method %s, alpha %g, L %d, n %d, lcm %s\n", SFD_VERSION_MAJOR,
                 SFD_VERSION_MINOR, cfg.method.c_str(), cfg.node.params.false_alarm_rate,
                 cfg.node.params.window_frames, cfg.node.params.group_size, cfg.lcm_url.c_str());
-    std::printf("sfd-node: gyro bias from the configuration (not estimated): %g %g %g rad/s\n",
-                b[0], b[1], b[2]);
+    if (cfg.node.nav.enabled && cfg.node.nav.gyro_bias_at_rest) {
+        std::printf(
+            "sfd-node: gyro bias estimated: mean gyro over the first %.2f s at rest, then "
+            "online in the EKF (until the filter starts: %g %g %g rad/s from the "
+            "configuration)\n",
+            cfg.node.nav.init_rest_s, b[0], b[1], b[2]);
+    } else if (cfg.node.nav.enabled) {
+        std::printf(
+            "sfd-node: gyro bias from the configuration at start (%g %g %g rad/s), then "
+            "estimated online in the EKF\n",
+            b[0], b[1], b[2]);
+    } else {
+        std::printf("sfd-node: gyro bias from the configuration (not estimated): %g %g %g rad/s\n",
+                    b[0], b[1], b[2]);
+    }
     std::fflush(stdout);
     unsigned long long heap_lcm_total = 0;
     while (!g_stop) {

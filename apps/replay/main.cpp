@@ -26,6 +26,7 @@ namespace {
 struct FrameRecord {
     std::vector<int64_t> ids;
     std::vector<int8_t> status;
+    double position[3] = {0, 0, 0};  // TRUTH: true IMU position; states: the EKF's
 };
 
 struct App {
@@ -33,7 +34,10 @@ struct App {
     int64_t current_timestamp = 0;
     std::string verdict_channel = "SFD_VERDICT";
     std::string timing_channel = "SFD_TIMING";
+    std::string state_channel = "SFD_STATE";
     std::map<int64_t, FrameRecord> verdicts;
+    std::map<int64_t, FrameRecord> states;  // SFD_STATE by frame time
+    sfd_nav_state_t decoded_state;
     bool write_failed = false;
     sfd_feature_verdict_t decoded;
 };
@@ -55,9 +59,15 @@ void write_event(lcm_eventlog_t *log, const std::string &channel, int64_t ts, co
 
 void on_publish(void *ctx, sfd_node_output_t kind, const void *data, int32_t size, int64_t) {
     App *app = static_cast<App *>(ctx);
-    const std::string &ch =
-        kind == SFD_NODE_OUT_VERDICT ? app->verdict_channel : app->timing_channel;
+    const std::string &ch = kind == SFD_NODE_OUT_VERDICT ? app->verdict_channel
+                            : kind == SFD_NODE_OUT_STATE ? app->state_channel
+                                                         : app->timing_channel;
     if (app->out != nullptr) write_event(app->out, ch, app->current_timestamp, data, size);
+    if (kind == SFD_NODE_OUT_STATE &&
+        sfd_nav_state_t_decode(data, 0, size, &app->decoded_state) == size) {
+        FrameRecord &r = app->states[app->decoded_state.utime];
+        for (int k = 0; k < 3; ++k) r.position[k] = app->decoded_state.position[k];
+    }
     if (kind == SFD_NODE_OUT_VERDICT &&
         sfd_feature_verdict_t_decode(data, 0, size, &app->decoded) == size) {
         FrameRecord &r = app->verdicts[app->decoded.utime];
@@ -151,6 +161,7 @@ int main(int argc, char **argv) {
     const std::string method_name = app_cfg.method;
     g_app.verdict_channel = app_cfg.channels.verdict;
     g_app.timing_channel = app_cfg.channels.timing;
+    g_app.state_channel = app_cfg.channels.state;
     if (in_path == nullptr) {
         std::fprintf(stderr, "sfd-replay: missing IN.lcmlog\n");
         usage(stderr);
@@ -201,11 +212,13 @@ int main(int argc, char **argv) {
             const auto t1 = std::chrono::steady_clock::now();
             frame_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
         } else if (ch == "TRUTH") {
+            sfd_node_handle(&g_node, SFD_NODE_TRUTH, ev->data, ev->datalen);
             if (sfd_truth_t_decode(ev->data, 0, ev->datalen, &tr) == ev->datalen &&
                 tr.num_features >= 0 && tr.num_features <= SFD_TRUTH_T_CAPACITY) {
                 FrameRecord &r = truth[tr.utime];
                 r.ids.assign(tr.track_id, tr.track_id + tr.num_features);
                 r.status.assign(tr.spurious, tr.spurious + tr.num_features);
+                for (int k = 0; k < 3; ++k) r.position[k] = tr.position[k];
             }
         } else {
             ++foreign;  // other channels (e.g. a previous run's outputs) are copied, not read
@@ -253,6 +266,21 @@ int main(int argc, char **argv) {
             }
         }
     }
+    // Position RMSE of SFD_STATE against TRUTH at the same frame times (no alignment: the filter
+    // starts from TRUTH (filter.init_from_truth) or at rest at the origin of its own frame, in
+    // which case the RMSE measures the drift from that start).
+    double se = 0.0;
+    long state_frames = 0;
+    for (const auto &kv : g_app.states) {
+        const auto it = truth.find(kv.first);
+        if (it == truth.end()) continue;
+        for (int k = 0; k < 3; ++k) {
+            const double d = kv.second.position[k] - it->second.position[k];
+            se += d * d;
+        }
+        ++state_frames;
+    }
+    const double rmse = state_frames > 0 ? std::sqrt(se / double(state_frames)) : 0.0;
     const double precision = tp + fp ? double(tp) / double(tp + fp) : 0.0;
     const double recall = tp + fn ? double(tp) / double(tp + fn) : 0.0;
     const double f1 = precision + recall > 0 ? 2 * precision * recall / (precision + recall) : 0.0;
@@ -269,6 +297,10 @@ int main(int argc, char **argv) {
             "  precision %.4f  recall %.4f  F1 %.4f  false-alarm rate %.5f  "
             "(TP %ld FP %ld TN %ld FN %ld; untested: %ld spurious, %ld consistent)\n",
             precision, recall, f1, far, tp, fp, tn, fn, untested_spurious, untested_consistent);
+    }
+    if (state_frames > 0) {
+        std::printf("  position RMSE %.4f m over %ld frames with SFD_STATE and TRUTH\n", rmse,
+                    state_frames);
     }
     std::sort(frame_us.begin(), frame_us.end());
     const double med = frame_us.empty() ? 0 : frame_us[frame_us.size() / 2];
@@ -301,9 +333,14 @@ int main(int argc, char **argv) {
                      "},\n  \"methods\": {\n    \"%s\": {\"frames_scored\": %ld, \"tp\": %ld, "
                      "\"fp\": %ld, \"tn\": %ld, \"fn\": %ld, \"untested_spurious\": %ld, "
                      "\"untested_consistent\": %ld, \"precision\": %.6f, \"recall\": %.6f, "
-                     "\"f1\": %.6f, \"false_alarm_rate\": %.6f}\n  }\n}\n",
+                     "\"f1\": %.6f, \"false_alarm_rate\": %.6f",
                      method_name.c_str(), scored, tp, fp, tn, fn, untested_spurious,
                      untested_consistent, precision, recall, f1, far);
+        if (state_frames > 0) {
+            std::fprintf(f, ", \"state_frames\": %ld, \"position_rmse_m\": %.6f", state_frames,
+                         rmse);
+        }
+        std::fprintf(f, "}\n  }\n}\n");
         std::fclose(f);
         const std::string tpath = std::string(summary_path) + ".timing.json";
         FILE *t = std::fopen(tpath.c_str(), "w");

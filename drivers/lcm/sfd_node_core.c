@@ -35,14 +35,24 @@ static void count(sfd_node_t *n, int reason) {
     if (reason >= 0 && reason < SFD_REJECT_NUM_REASONS) n->counters.rejected[reason]++;
 }
 
+void sfd_node_config_default(sfd_node_config_t *cfg) {
+    memset(cfg, 0, sizeof *cfg);
+    sfd_params_default(&cfg->params);
+    cfg->camera_id = -1;
+    cfg->publish_timing = 1;
+    sfd_nav_config_default(&cfg->nav);
+}
+
 sfd_status_t sfd_node_init(sfd_node_t *node, const sfd_node_config_t *cfg,
                            sfd_node_publish_fn publish, sfd_node_clock_fn clock, void *ctx) {
     if (node == NULL || cfg == NULL || publish == NULL) return SFD_ERR_INVAL;
     const sfd_status_t v = sfd_params_validate(&cfg->params);
     if (v != SFD_OK) return v;
-    if (cfg->params.method != SFD_METHOD_NONE && cfg->params.method != SFD_METHOD_PARITY) {
-        return SFD_ERR_INVAL;
-    }
+    const int32_t m = cfg->params.method;
+    const int needs_filter = m == SFD_METHOD_OPRF || m == SFD_METHOD_RANSAC1 ||
+                             m == SFD_METHOD_RANSACF || m == SFD_METHOD_BOTH;
+    if (needs_filter && !cfg->nav.enabled) return SFD_ERR_INVAL;
+    if (sfd_nav_init(&node->nav, &cfg->nav, &cfg->params) != SFD_OK) return SFD_ERR_INVAL;
     memset(&node->counters, 0, sizeof node->counters);
     node->cfg = *cfg;
     node->publish = publish;
@@ -59,8 +69,29 @@ sfd_status_t sfd_node_init(sfd_node_t *node, const sfd_node_config_t *cfg,
     return SFD_OK;
 }
 
-static void publish_results(sfd_node_t *n, const sfd_frame_t *frame, int64_t ingest_us,
-                            int64_t parity_us, int64_t t_start) {
+static void publish_state(sfd_node_t *n, int64_t utime) {
+    const sfd_ekf_t *e = &n->nav.ekf;
+    sfd_nav_state_t *s = &n->wire_state;
+    s->utime = utime;
+    for (int k = 0; k < 3; ++k) {
+        s->position[k] = e->p_IinW_m[k];
+        s->velocity[k] = e->v_IinW_m_s[k];
+        s->position_var[k] = e->P[(SFD_EKF_IDX_P + k) * SFD_EKF_DIM + SFD_EKF_IDX_P + k];
+    }
+    for (int k = 0; k < 4; ++k) s->orientation[k] = e->q_ItoW[k];
+    const int size = sfd_nav_state_t_encode(n->out_buf, 0, SFD_NODE_MAX_MESSAGE, s);
+    if (size > 0) n->publish(n->ctx, SFD_NODE_OUT_STATE, n->out_buf, size, utime);
+}
+
+typedef struct {
+    int64_t ingest_us, parity_us, association_us, update_us;
+    int32_t hypotheses_used;
+    int8_t budget_exhausted;
+} stage_times_t;
+
+static void publish_results(sfd_node_t *n, const sfd_frame_t *frame, const stage_times_t *st,
+                            int64_t t_start) {
+    const int64_t ingest_us = st->ingest_us;
     sfd_feature_verdict_t *w = &n->wire_verdict;
     const sfd_verdict_t *v = &n->verdict;
     w->utime = frame->utime;
@@ -82,13 +113,18 @@ static void publish_results(sfd_node_t *n, const sfd_frame_t *frame, int64_t ing
     if (size > 0) n->publish(n->ctx, SFD_NODE_OUT_VERDICT, n->out_buf, size, frame->utime);
     n->counters.frames_processed++;
     if (v->num_consistent + v->num_spurious == 0) n->counters.frames_untested++;
+    if (n->cfg.nav.enabled && n->nav.ready) publish_state(n, frame->utime);
     if (!n->cfg.publish_timing) return;
     sfd_timing_t *t = &n->wire_timing;
     memset(t, 0, sizeof *t);
     t->utime = frame->utime;
     t->features_in = frame->num_features;
     t->ingest_us = clamp_i32(ingest_us);
-    t->parity_us = clamp_i32(parity_us);
+    t->parity_us = clamp_i32(st->parity_us);
+    t->association_us = clamp_i32(st->association_us);
+    t->update_us = clamp_i32(st->update_us);
+    t->hypotheses_used = st->hypotheses_used;
+    t->budget_exhausted = st->budget_exhausted;
     t->total_us = clamp_i32(now_us(n) - t_start + ingest_us);
     for (int k = 0; k < SFD_REJECT_NUM_REASONS; ++k) t->rejected[k] = n->counters.rejected[k];
     size = sfd_timing_t_encode(n->out_buf, 0, SFD_NODE_MAX_MESSAGE, t);
@@ -108,28 +144,28 @@ static void untested_verdict(sfd_node_t *n, const sfd_frame_t *frame) {
     }
 }
 
-/* Judges one frame. imu_reason: SFD_REJECT_NONE when the IMU may cover it, else why it cannot. */
-static void process_frame(sfd_node_t *n, const sfd_frame_t *frame, int64_t ingest_us,
-                          int imu_reason) {
-    const int64_t t0 = now_us(n);
+static void recount(sfd_verdict_t *v) {
+    v->num_consistent = v->num_spurious = v->num_untested = 0;
+    for (int i = 0; i < v->num_features; ++i) {
+        if (v->features[i].status == SFD_VERDICT_CONSISTENT)
+            v->num_consistent++;
+        else if (v->features[i].status == SFD_VERDICT_SPURIOUS)
+            v->num_spurious++;
+        else
+            v->num_untested++;
+    }
+}
+
+/* The parity detector on this frame (methods PARITY and BOTH): verdict in n->verdict. */
+static void run_parity(sfd_node_t *n, const sfd_frame_t *frame, int imu_reason) {
     sfd_frame_motion_t motion;
     const sfd_frame_motion_t *mp = NULL;
     int reason = imu_reason;
-    if (n->cfg.params.method == SFD_METHOD_NONE) {
-        untested_verdict(n, frame);
-        for (int i = 0; i < frame->num_features; ++i) {
-            n->verdict.features[i].status = SFD_VERDICT_CONSISTENT; /* accept all */
-        }
-        n->verdict.num_untested = 0;
-        n->verdict.num_consistent = frame->num_features;
-        publish_results(n, frame, ingest_us, 0, t0);
-        n->prev_frame_utime = frame->utime;
-        n->have_prev_frame = 1;
-        return;
-    }
     if (n->have_prev_frame && reason == SFD_REJECT_NONE) {
-        reason = sfd_assemble_motion(&n->ring, &n->ext, n->cfg.params.gyro_bias_rad_s,
-                                     n->prev_frame_utime, frame->utime,
+        /* the filter's gyro bias once it runs (estimated at rest and online), else the config's */
+        const double *bias = (n->cfg.nav.enabled && n->nav.ready) ? n->nav.ekf.bg_rad_s
+                                                                  : n->cfg.params.gyro_bias_rad_s;
+        reason = sfd_assemble_motion(&n->ring, &n->ext, bias, n->prev_frame_utime, frame->utime,
                                      n->cfg.params.max_imu_gap_us, n->imu_scratch, &motion);
         if (reason == SFD_REJECT_NONE) mp = &motion;
     }
@@ -144,8 +180,79 @@ static void process_frame(sfd_node_t *n, const sfd_frame_t *frame, int64_t inges
         sfd_parity_reset(&n->parity);
         untested_verdict(n, frame);
     }
+}
+
+/* Judges one frame. imu_reason: SFD_REJECT_NONE when the IMU may cover it, else why it cannot. */
+static void process_frame(sfd_node_t *n, const sfd_frame_t *frame, int64_t ingest_us,
+                          int imu_reason) {
+    const int64_t t0 = now_us(n);
+    const int32_t method = n->cfg.params.method;
+    stage_times_t times = {ingest_us, 0, 0, 0, 0, 0};
+    /* The filter first: its propagation needs the same IMU as the parity motion. */
+    int nav_ok = 0;
+    if (n->cfg.nav.enabled && imu_reason == SFD_REJECT_NONE) {
+        const int r =
+            sfd_nav_advance(&n->nav, &n->ring, frame->utime, n->imu_scratch, SFD_MAX_IMU_SAMPLES);
+        if (r != SFD_REJECT_NONE) count(n, r);
+        nav_ok = (r == SFD_REJECT_NONE) && n->nav.ready;
+    } else if (n->cfg.nav.enabled && n->nav.ready) {
+        n->nav.ready = 0; /* no IMU for this interval: restart from gravity later */
+    }
+    if (method == SFD_METHOD_PARITY || method == SFD_METHOD_BOTH) {
+        run_parity(n, frame, imu_reason);
+    } else {
+        untested_verdict(n, frame);
+        if (method == SFD_METHOD_NONE) {
+            for (int i = 0; i < frame->num_features; ++i) {
+                n->verdict.features[i].status = SFD_VERDICT_CONSISTENT; /* accept all */
+            }
+        }
+    }
     const int64_t t1 = now_us(n);
-    publish_results(n, frame, ingest_us, t1 - t0, t0);
+    times.parity_us = t1 - t0;
+    if (nav_ok) {
+        /* PARITY: the filter uses what parity accepted; BOTH: OPRF judges parity's survivors */
+        for (int i = 0; i < frame->num_features; ++i) {
+            const int8_t ps = n->verdict.features[i].status;
+            n->skip[i] = (uint8_t)((method == SFD_METHOD_PARITY && ps != SFD_VERDICT_CONSISTENT) ||
+                                   (method == SFD_METHOD_BOTH && ps == SFD_VERDICT_SPURIOUS));
+        }
+        const int32_t nm = sfd_nav_build(&n->nav, &n->camera, frame, n->skip);
+        sfd_nav_t *nv = &n->nav;
+        const sfd_status_t s1 =
+            sfd_assoc_select(&nv->assoc, &nv->ekf, &nv->ekf_cam, nv->prev_R_CtoW, nv->prev_p_CinW_m,
+                             nv->matches, nm, &nv->result);
+        const int64_t t2 = now_us(n);
+        const sfd_status_t s2 = (s1 == SFD_OK) ? sfd_assoc_apply(&nv->assoc, &nv->ekf, &nv->ekf_cam,
+                                                                 nv->matches, nm, &nv->result)
+                                               : s1;
+        const int64_t t3 = now_us(n);
+        times.association_us = t2 - t1;
+        times.update_us = t3 - t2;
+        if (s1 != SFD_OK || s2 != SFD_OK || nv->result.update_status != SFD_OK) {
+            count(n, SFD_REJECT_CORE);
+        }
+        if (s1 == SFD_OK && s2 == SFD_OK) {
+            times.hypotheses_used = nv->result.hypotheses_used;
+            times.budget_exhausted = (int8_t)nv->result.budget_exhausted;
+            const int assoc_verdicts = method == SFD_METHOD_OPRF || method == SFD_METHOD_RANSAC1 ||
+                                       method == SFD_METHOD_RANSACF || method == SFD_METHOD_BOTH;
+            for (int i = 0; assoc_verdicts && i < frame->num_features; ++i) {
+                const int32_t k = nv->feature_match[i];
+                sfd_feature_result_t *f = &n->verdict.features[i];
+                if (k < 0) continue; /* BOTH: parity's verdict stays; others: UNTESTED */
+                f->status = nv->result.status[k];
+                f->stage = nv->result.stage[k];
+                f->statistic = nv->result.statistic[k];
+            }
+        }
+    }
+    recount(&n->verdict);
+    for (int i = 0; i < frame->num_features; ++i) {
+        n->final_status[i] = n->verdict.features[i].status;
+    }
+    if (n->cfg.nav.enabled) sfd_nav_finish(&n->nav, frame, n->final_status);
+    publish_results(n, frame, &times, t0);
     n->prev_frame_utime = frame->utime;
     n->have_prev_frame = 1;
 }
@@ -193,6 +300,7 @@ static void handle_camera_info(sfd_node_t *n, const void *data, int32_t size) {
     }
     n->camera = cam;
     n->ext = ext;
+    sfd_nav_set_camera(&n->nav, &cam, &ext);
     n->camera_id = id;
     n->have_camera = 1;
     n->have_prev_frame = 0; /* a new calibration starts a new window */
@@ -221,7 +329,8 @@ static void handle_features(sfd_node_t *n, const void *data, int32_t size) {
         process_frame(n, &n->pending, n->pending_ingest_us, SFD_REJECT_IMU_LATE);
     }
     const int64_t ingest = now_us(n) - t0;
-    if (n->cfg.params.method != SFD_METHOD_NONE && n->have_prev_frame &&
+    const int needs_imu = n->cfg.params.method != SFD_METHOD_NONE || n->cfg.nav.enabled;
+    if (needs_imu && (n->have_prev_frame || n->cfg.nav.enabled) &&
         sfd_imu_ring_newest(&n->ring) < n->frame.utime) {
         n->pending = n->frame; /* wait (bounded: until the next frame or the end of input) */
         n->pending_ingest_us = ingest;
@@ -241,6 +350,13 @@ void sfd_node_handle(sfd_node_t *node, sfd_node_input_t kind, const void *data, 
             break;
         case SFD_NODE_FEATURES:
             handle_features(node, data, size);
+            break;
+        case SFD_NODE_TRUTH:
+            if (node->cfg.nav.init_from_truth && data != NULL && size > 0 &&
+                sfd_truth_t_decode(data, 0, size, &node->wire_truth) == size) {
+                sfd_nav_truth(&node->nav, node->wire_truth.utime, node->wire_truth.position,
+                              node->wire_truth.orientation);
+            }
             break;
         default:
             count(node, SFD_REJECT_DECODE);

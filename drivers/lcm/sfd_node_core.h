@@ -4,7 +4,8 @@
  * @brief The node's message handling, shared by sfd-node (live LCM) and sfd-replay (log files),
  *        so that replay drives exactly the node's code path: decode and validate IMU,
  *        CAMERA_INFO and FEATURES, keep the IMU ring, assemble each frame's motion, run the
- *        detector, and publish SFD_VERDICT and SFD_TIMING through a caller-supplied function.
+ *        parity detector and/or the EKF with its association method (sfd_node_nav.h), and
+ *        publish SFD_VERDICT, SFD_STATE and SFD_TIMING through a caller-supplied function.
  *
  * Heap: none. All storage is in sfd_node_t (caller-owned, ~0.3 MiB: declare it static). Time
  * enters only through message timestamps; the optional clock function is used for SFD_TIMING's
@@ -22,6 +23,9 @@
 #include "sfd_feature_verdict_t.h"
 #include "sfd_imu_ring.h"
 #include "sfd_lcm_codec.h"
+#include "sfd_nav_state_t.h"
+#include "sfd_truth_t.h"
+#include "sfd_node_nav.h"
 #include "sfd_timing_t.h"
 
 #ifdef __cplusplus
@@ -29,13 +33,23 @@ extern "C" {
 #endif
 
 /** Input message kinds (the app maps channel names to these). */
-typedef enum { SFD_NODE_IMU = 0, SFD_NODE_CAMERA_INFO = 1, SFD_NODE_FEATURES = 2 } sfd_node_input_t;
+typedef enum {
+    SFD_NODE_IMU = 0,
+    SFD_NODE_CAMERA_INFO = 1,
+    SFD_NODE_FEATURES = 2,
+    SFD_NODE_TRUTH = 3 /**< evaluation only: used when cfg.nav.init_from_truth is set */
+} sfd_node_input_t;
 
 /** Output message kinds. */
-typedef enum { SFD_NODE_OUT_VERDICT = 0, SFD_NODE_OUT_TIMING = 1 } sfd_node_output_t;
+typedef enum {
+    SFD_NODE_OUT_VERDICT = 0,
+    SFD_NODE_OUT_TIMING = 1,
+    SFD_NODE_OUT_STATE = 2
+} sfd_node_output_t;
 
 typedef struct {
-    sfd_params_t params;    /**< detector parameters (method: NONE or PARITY in this build) */
+    sfd_params_t params;    /**< detector parameters (method: any sfd_method_t) */
+    sfd_nav_config_t nav;   /**< the EKF and landmarks (required by oprf, ransac1, ransacf, both) */
     int32_t camera_id;      /**< camera to follow; -1 = the first CAMERA_INFO's */
     int32_t publish_timing; /**< 1: publish SFD_TIMING after every frame */
 } sfd_node_config_t;
@@ -66,6 +80,7 @@ typedef struct {
     sfd_node_counters_t counters;
     /* detector and sensor state */
     sfd_parity_t parity;
+    sfd_nav_t nav;
     sfd_imu_ring_t ring;
     sfd_camera_t camera;
     sfd_extrinsics_t ext;
@@ -84,14 +99,22 @@ typedef struct {
     sfd_verdict_t verdict;
     sfd_feature_verdict_t wire_verdict;
     sfd_timing_t wire_timing;
+    sfd_nav_state_t wire_state;
+    sfd_truth_t wire_truth;
+    int8_t final_status[SFD_MAX_FEATURES];
+    uint8_t skip[SFD_MAX_FEATURES];
     sfd_imu_sample_t imu_scratch[SFD_MAX_IMU_SAMPLES];
     uint8_t out_buf[SFD_NODE_MAX_MESSAGE];
 } sfd_node_t;
 
+/** @brief Defaults: sfd_params_default(), camera_id -1 (follow the first CAMERA_INFO), timing
+ *         published, sfd_nav_config_default(). */
+void sfd_node_config_default(sfd_node_config_t *cfg);
+
 /**
  * @brief Initializes the node. The detector starts when the first valid CAMERA_INFO arrives.
- * @return SFD_OK; SFD_ERR_INVAL for null arguments, invalid parameters, or a method this build
- *         does not have yet (OPRF, RANSAC1, RANSACF, BOTH arrive with the EKF).
+ * @return SFD_OK; SFD_ERR_INVAL for null arguments, invalid parameters, or a method that needs
+ *         the filter (OPRF, RANSAC1, RANSACF, BOTH) with cfg->nav.enabled = 0.
  */
 sfd_status_t sfd_node_init(sfd_node_t *node, const sfd_node_config_t *cfg,
                            sfd_node_publish_fn publish, sfd_node_clock_fn clock, void *ctx);

@@ -43,10 +43,7 @@ void fz_fail(const char *file, int line, const char *what) {
 }
 
 void fz_default_config(sfd_node_config_t *cfg) {
-    memset(cfg, 0, sizeof *cfg);
-    FZ_CHECK(sfd_params_default(&cfg->params) == SFD_OK);
-    cfg->camera_id = -1;
-    cfg->publish_timing = 1;
+    sfd_node_config_default(cfg);
 }
 
 static void check_verdict(const void *data, int32_t size, int64_t utime) {
@@ -312,7 +309,11 @@ void fz_config_from_byte(uint8_t b, sfd_node_config_t *cfg) {
     const int n = groups[(b >> 6) & 3u];
     cfg->params.window_frames = L < SFD_MAX_WINDOW ? L : SFD_MAX_WINDOW;
     cfg->params.group_size = n < SFD_MAX_GROUP ? n : SFD_MAX_GROUP;
-    if (b & 4u) cfg->params.method = SFD_METHOD_NONE;
+    if (b & 4u) { /* bits 4 and 5 then pick the filter methods */
+        cfg->params.method = (b & 16u)   ? SFD_METHOD_OPRF
+                             : (b & 32u) ? SFD_METHOD_BOTH
+                                         : SFD_METHOD_NONE;
+    }
     if (b & 8u) cfg->camera_id = 0;
     if (b & 16u) cfg->params.parity_isolation = 0;
     if (b & 32u) cfg->params.exact_depth_covariance = 0;

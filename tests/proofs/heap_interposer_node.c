@@ -39,9 +39,7 @@ int main(void) {
     (void)fflush(stdout);
 
     sfd_node_config_t cfg;
-    sfd_params_default(&cfg.params);
-    cfg.camera_id = -1;
-    cfg.publish_timing = 1;
+    sfd_node_config_default(&cfg);
     CHECK(sfd_node_init(&g_node, &cfg, on_publish, NULL, NULL) == SFD_OK);
     scene_init(&g_scene, 5, 200, 1.0);
     g_scene.respawn = 1;

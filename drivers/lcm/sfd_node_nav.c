@@ -1,0 +1,261 @@
+/* SPDX-License-Identifier: MIT */
+#include "sfd_node_nav.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "sfd_lcm_codec.h"
+
+void sfd_nav_config_default(sfd_nav_config_t *cfg) {
+    memset(cfg, 0, sizeof *cfg);
+    cfg->enabled = 1;
+    sfd_ekf_noise_default(&cfg->noise);
+    for (int k = 0; k < 3; ++k) {
+        cfg->p0_diag[SFD_EKF_IDX_P + k] = 1e-6;
+        cfg->p0_diag[SFD_EKF_IDX_V + k] = 1e-4;
+        cfg->p0_diag[SFD_EKF_IDX_THETA + k] = (k == 2) ? 1e-6 : 1e-4;
+        cfg->p0_diag[SFD_EKF_IDX_BG + k] = 1e-4;
+        cfg->p0_diag[SFD_EKF_IDX_BA + k] = 1e-2;
+    }
+    cfg->init_rest_s = 0.5;
+    cfg->gyro_bias_at_rest = 1;
+    cfg->landmark_depth_var_m2 = 100.0;
+    cfg->landmark_max_age_s = 2.0;
+    cfg->landmark_gate_alpha = 0.001;
+    cfg->min_parallax_px = 1.0;
+}
+
+int32_t sfd_nav_assoc_method(int32_t detector_method) {
+    switch (detector_method) {
+        case SFD_METHOD_OPRF:
+        case SFD_METHOD_RANSAC1:
+        case SFD_METHOD_RANSACF:
+            return detector_method;
+        case SFD_METHOD_BOTH:
+            return SFD_METHOD_OPRF;
+        default:
+            return SFD_METHOD_NONE;
+    }
+}
+
+sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd_params_t *params) {
+    if (nav == NULL || cfg == NULL || params == NULL) return SFD_ERR_INVAL;
+    if (!(cfg->init_rest_s > 0.0 && cfg->init_rest_s < 60.0) ||
+        !(cfg->landmark_depth_var_m2 >= 0.0 && isfinite(cfg->landmark_depth_var_m2)) ||
+        !(cfg->landmark_max_age_s > 0.0 && isfinite(cfg->landmark_max_age_s)) ||
+        !(cfg->landmark_gate_alpha > 0.0 && cfg->landmark_gate_alpha < 1.0)) {
+        return SFD_ERR_INVAL;
+    }
+    for (int i = 0; i < SFD_EKF_DIM; ++i) {
+        if (!(cfg->p0_diag[i] >= 0.0 && isfinite(cfg->p0_diag[i]))) return SFD_ERR_INVAL;
+    }
+    nav->cfg = *cfg;
+    nav->params = *params;
+    memset(&nav->ekf, 0, sizeof nav->ekf);
+    nav->ready = 0;
+    nav->starts = 0;
+    nav->have_truth0 = 0;
+    nav->ekf_utime = 0;
+    nav->have_prev = 0;
+    nav->prev_n = 0;
+    nav->num_matches = 0;
+    sfd_assoc_params_t ap;
+    sfd_assoc_params_from(params, &ap);
+    ap.method = sfd_nav_assoc_method(params->method);
+    ap.min_parallax_px = cfg->min_parallax_px;
+    sfd_status_t st = sfd_assoc_init(&nav->assoc, &ap);
+    if (st != SFD_OK) return st;
+    st = sfd_landmark_map_init(&nav->map);
+    return st;
+}
+
+void sfd_nav_set_camera(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_extrinsics_t *ext) {
+    memset(&nav->ekf_cam, 0, sizeof nav->ekf_cam);
+    nav->ekf_cam.fx_px = cam->fx_px;
+    nav->ekf_cam.fy_px = cam->fy_px;
+    nav->ekf_cam.cx_px = cam->cx_px;
+    nav->ekf_cam.cy_px = cam->cy_px;
+    nav->ekf_cam.ext = *ext;
+    nav->ekf_cam.pixel_sigma_px = nav->params.pixel_sigma_px;
+    sfd_landmark_map_init(&nav->map);
+    nav->have_prev = 0;
+    nav->prev_n = 0;
+}
+
+/* Starts the filter from the IMU of [t - init_rest_s, t] (SPEC: at rest, gravity direction). */
+static int start_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
+                         sfd_imu_sample_t *scratch, int32_t cap) {
+    const int64_t rest_us = (int64_t)(nav->cfg.init_rest_s * 1e6);
+    int32_t n = 0;
+    const int r = sfd_imu_ring_window(ring, t_us - rest_us, t_us, scratch, cap, &n);
+    /* Not yet init_rest_s of IMU before this frame: keep waiting (not a rejection). */
+    if (r == SFD_REJECT_IMU_GAP || (r == SFD_REJECT_NONE && n < 2)) return SFD_REJECT_NONE;
+    if (r != SFD_REJECT_NONE) return r;
+    double f[3] = {0, 0, 0}, w[3] = {0, 0, 0};
+    for (int32_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            f[k] += scratch[i].accel_m_s2[k];
+            w[k] += scratch[i].gyro_rad_s[k];
+        }
+    }
+    for (int k = 0; k < 3; ++k) {
+        f[k] /= n;
+        w[k] /= n;
+    }
+    const double *bias = nav->cfg.gyro_bias_at_rest ? w : nav->params.gyro_bias_rad_s;
+    if (sfd_ekf_init_from_gravity(&nav->ekf, &nav->cfg.noise, f, bias, nav->cfg.p0_diag) !=
+        SFD_OK) {
+        return SFD_REJECT_CORE; /* not at rest (or bad values): try again at the next frame */
+    }
+    nav->ekf_utime = t_us;
+    nav->ready = 1;
+    nav->starts++;
+    nav->have_prev = 0; /* no prior pose for the previous frame's matches */
+    return SFD_REJECT_NONE;
+}
+
+void sfd_nav_truth(sfd_nav_t *nav, int64_t utime, const double p_m[3], const double q_wxyz[4]) {
+    if (!nav->cfg.enabled || !nav->cfg.init_from_truth || nav->ready) return;
+    if (!nav->have_truth0 || utime <= nav->truth0_utime) {
+        nav->have_truth0 = 1;
+        nav->truth0_utime = utime;
+        memcpy(nav->truth0_p, p_m, sizeof nav->truth0_p);
+        return;
+    }
+    const double dt = (double)(utime - nav->truth0_utime) * 1e-6;
+    double v[3];
+    for (int k = 0; k < 3; ++k) v[k] = (p_m[k] - nav->truth0_p[k]) / dt;
+    const double zero[3] = {0, 0, 0};
+    double q[4];
+    memcpy(q, q_wxyz, sizeof q);
+    if (sfd_quat_normalize(q) != SFD_OK ||
+        sfd_ekf_init(&nav->ekf, &nav->cfg.noise, p_m, v, q, nav->params.gyro_bias_rad_s, zero,
+                     nav->cfg.p0_diag) != SFD_OK) {
+        nav->have_truth0 = 0;
+        return;
+    }
+    nav->ekf_utime = utime;
+    nav->ready = 1;
+    nav->starts++;
+    nav->have_prev = 0;
+}
+
+int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
+                    sfd_imu_sample_t *scratch, int32_t cap) {
+    if (!nav->cfg.enabled) return SFD_REJECT_NONE;
+    if (!nav->ready && nav->cfg.init_from_truth) return SFD_REJECT_NONE; /* waits for TRUTH */
+    if (!nav->ready) return start_at_rest(nav, ring, t_us, scratch, cap);
+    if (t_us <= nav->ekf_utime) return SFD_REJECT_NONE;
+    int32_t n = 0;
+    const int r = sfd_imu_ring_window(ring, nav->ekf_utime, t_us, scratch, cap, &n);
+    if (r != SFD_REJECT_NONE) {
+        if (r == SFD_REJECT_IMU_GAP) nav->ready = 0; /* lost: restart from gravity later */
+        return r;
+    }
+    /* Zero-order hold: sample i holds from its time (or the filter's) to the next sample's
+     * (or t_us). The window starts at the last sample at or before ekf_utime. */
+    int64_t t = nav->ekf_utime;
+    for (int32_t i = 0; i < n && t < t_us; ++i) {
+        const int64_t t_end =
+            (i + 1 < n && scratch[i + 1].t_us < t_us) ? scratch[i + 1].t_us : t_us;
+        if (t_end <= t) continue;
+        const double dt = (double)(t_end - t) * 1e-6;
+        if (dt > nav->cfg.noise.max_dt_s ||
+            sfd_ekf_propagate(&nav->ekf, scratch[i].gyro_rad_s, scratch[i].accel_m_s2, dt) !=
+                SFD_OK) {
+            nav->ready = 0;
+            return (dt > nav->cfg.noise.max_dt_s) ? SFD_REJECT_IMU_GAP : SFD_REJECT_CORE;
+        }
+        t = t_end;
+    }
+    nav->ekf_utime = t_us;
+    return SFD_REJECT_NONE;
+}
+
+int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *frame,
+                      const uint8_t *skip) {
+    nav->num_matches = 0;
+    for (int32_t i = 0; i < frame->num_features; ++i) {
+        nav->feature_match[i] = -1;
+        const double uv_raw[2] = {frame->features[i].u_px, frame->features[i].v_px};
+        nav->ok[i] = (uint8_t)(sfd_camera_undistort(cam, uv_raw, nav->xn[i], NULL) == SFD_OK);
+        nav->uv[i][0] = cam->fx_px * nav->xn[i][0] + cam->cx_px;
+        nav->uv[i][1] = cam->fy_px * nav->xn[i][1] + cam->cy_px;
+    }
+    if (!nav->cfg.enabled || !nav->ready || !nav->have_prev) return 0;
+    for (int32_t i = 0; i < frame->num_features; ++i) {
+        if (!nav->ok[i] || (skip != NULL && skip[i])) continue;
+        const int64_t id = frame->features[i].track_id;
+        int32_t p = -1;
+        for (int32_t k = 0; k < nav->prev_n; ++k) { /* bounded: <= SFD_MAX_FEATURES */
+            if (nav->prev_track[k] == id) {
+                p = k;
+                break;
+            }
+        }
+        if (p < 0) continue;
+        const int32_t li = sfd_landmark_find(&nav->map, id);
+        if (li < 0) continue;
+        sfd_match_t *m = &nav->matches[nav->num_matches];
+        m->prev_uv_px[0] = nav->prev_uv[p][0];
+        m->prev_uv_px[1] = nav->prev_uv[p][1];
+        if (sfd_landmark_to_obs(&nav->map, li, nav->uv[i], &m->obs) != SFD_OK) continue;
+        nav->match_feature[nav->num_matches] = i;
+        nav->feature_match[i] = nav->num_matches;
+        nav->num_matches++;
+    }
+    return nav->num_matches;
+}
+
+void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *status) {
+    if (!nav->cfg.enabled || !nav->ready) {
+        nav->have_prev = 0;
+        return;
+    }
+    double R_CtoW[9], p_C[3], cov6[36];
+    sfd_ekf_camera_pose(&nav->ekf, &nav->ekf_cam.ext, R_CtoW, p_C);
+    const int have_cov = sfd_landmark_camera_pose_cov(&nav->ekf, &nav->ekf_cam.ext, cov6) == SFD_OK;
+    const double f = 0.5 * (nav->ekf_cam.fx_px + nav->ekf_cam.fy_px);
+    const double sigma_xn = nav->params.pixel_sigma_px / f;
+    const int64_t t = frame->utime;
+    for (int32_t i = 0; i < frame->num_features; ++i) {
+        if (!nav->ok[i]) continue;
+        const int64_t id = frame->features[i].track_id;
+        if (status[i] == SFD_VERDICT_SPURIOUS) {
+            /* The track no longer fits its landmark (a jump, a mover): drop the landmark, so the
+             * track is re-anchored from its next observation instead of failing for as long as
+             * the stale landmark lives. */
+            (void)sfd_landmark_remove(&nav->map, id);
+            continue;
+        }
+        const int32_t li = sfd_landmark_find(&nav->map, id);
+        if (li >= 0) {
+            if (status[i] != SFD_VERDICT_CONSISTENT) continue;
+            sfd_landmark_update_t info;
+            (void)sfd_landmark_refine(&nav->map, li, R_CtoW, p_C, have_cov ? cov6 : NULL,
+                                      nav->xn[i], sigma_xn, nav->cfg.landmark_gate_alpha, t, &info);
+            continue;
+        }
+        const double d = frame->features[i].depth_m;
+        const int known = d > 0.0;
+        (void)sfd_landmark_init_from_ray(
+            &nav->map, id, R_CtoW, p_C, have_cov ? cov6 : NULL, nav->xn[i],
+            known ? d : nav->params.default_depth_m,
+            known ? frame->features[i].depth_var_m2 + 1e-6 : nav->cfg.landmark_depth_var_m2,
+            sigma_xn, t, NULL);
+    }
+    const int64_t max_age_us = (int64_t)(nav->cfg.landmark_max_age_s * 1e6);
+    (void)sfd_landmark_evict_older_than(&nav->map, t - max_age_us);
+    /* the non-SPURIOUS observations become the next frame's previous ones */
+    nav->prev_n = 0;
+    for (int32_t i = 0; i < frame->num_features; ++i) {
+        if (!nav->ok[i] || status[i] == SFD_VERDICT_SPURIOUS) continue;
+        nav->prev_track[nav->prev_n] = frame->features[i].track_id;
+        nav->prev_uv[nav->prev_n][0] = nav->uv[i][0];
+        nav->prev_uv[nav->prev_n][1] = nav->uv[i][1];
+        nav->prev_n++;
+    }
+    memcpy(nav->prev_R_CtoW, R_CtoW, sizeof R_CtoW);
+    memcpy(nav->prev_p_CinW_m, p_C, sizeof p_C);
+    nav->have_prev = 1;
+}

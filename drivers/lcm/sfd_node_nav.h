@@ -1,0 +1,135 @@
+/* SPDX-License-Identifier: MIT */
+/**
+ * @file sfd_node_nav.h
+ * @brief The node's navigation side (SPEC "LCM interface"): the EKF started at rest from
+ *        gravity and propagated with every IMU sample, the landmark map built from the tracks
+ *        (first observation + depth prior, refined along the track), and the matches handed to
+ *        the association methods (OPRF, 1-point RANSAC, F-matrix RANSAC, none).
+ *
+ * The node calls, per frame: sfd_nav_advance() (propagate to the frame), sfd_nav_build()
+ * (matches of the tracks seen in the previous frame that have a landmark), then times
+ * sfd_assoc_select() / sfd_assoc_apply() itself (SFD_TIMING stages), then sfd_nav_finish()
+ * (landmarks refined or created with the posterior camera pose, the frame kept for the next).
+ *
+ * Heap: none; all storage in sfd_nav_t (caller-owned, inside sfd_node_t).
+ */
+#ifndef SFD_NODE_NAV_H
+#define SFD_NODE_NAV_H
+
+#include <stdint.h>
+
+#include <sfd/sfd.h>
+#include <sfd/sfd_landmarks.h>
+
+#include "sfd_imu_ring.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Configuration of the navigation side (YAML section `filter`, apps/config/sfd.yaml). */
+typedef struct {
+    int32_t enabled;              /**< 1: run the EKF (required by oprf, ransac1, ransacf, both) */
+    sfd_ekf_noise_t noise;        /**< IMU noise densities */
+    double p0_diag[SFD_EKF_DIM];  /**< initial variances, SFD_EKF_IDX_* order */
+    double init_rest_s;           /**< IMU averaged at rest for the gravity start (s), > 0 */
+    int32_t gyro_bias_at_rest;    /**< 1: the mean gyro at rest is the initial bias; 0: the
+                                       configured params.gyro_bias_rad_s */
+    double landmark_depth_var_m2; /**< depth variance of a landmark whose feature has no depth
+                                       prior (the default depth is params.default_depth_m) */
+    double landmark_max_age_s;    /**< landmarks unseen for longer are dropped (s), > 0 */
+    double landmark_gate_alpha;   /**< false-alarm rate of the landmark refinement gate */
+    double min_parallax_px;       /**< OPRF degenerate-motion threshold (sfd_assoc_params_t) */
+    int32_t init_from_truth;      /**< evaluation only (SPEC): start from the first two TRUTH poses
+                                       (velocity from their difference) instead of at rest */
+} sfd_nav_config_t;
+
+/** @brief Defaults: enabled; sfd_ekf_noise_default(); P0 position 1e-6 m^2 (the origin is
+ *         defined by the start), velocity 1e-4, attitude 1e-4 rad^2 (yaw 1e-6), gyro bias 1e-4,
+ *         accel bias 1e-2; 0.5 s at rest with the gyro bias from it; unknown depth variance
+ *         100 m^2; landmarks dropped after 2 s unseen; gate alpha 0.001; 1 px parallax. */
+void sfd_nav_config_default(sfd_nav_config_t *cfg);
+
+typedef struct {
+    sfd_nav_config_t cfg;
+    sfd_params_t params;
+    sfd_ekf_t ekf;
+    int64_t ekf_utime;   /**< time the filter state refers to (us) */
+    int32_t ready;       /**< 1 once started from gravity */
+    int32_t starts;      /**< times the filter was (re)started */
+    int32_t have_truth0; /**< init_from_truth: the first TRUTH pose is held */
+    int64_t truth0_utime;
+    double truth0_p[3];
+    sfd_assoc_t assoc;
+    sfd_assoc_result_t result;
+    sfd_landmark_map_t map;
+    sfd_ekf_camera_t ekf_cam;
+    /* the current frame */
+    int32_t num_matches;
+    sfd_match_t matches[SFD_MAX_FEATURES];
+    int32_t match_feature[SFD_MAX_FEATURES]; /**< feature index of each match */
+    int32_t feature_match[SFD_MAX_FEATURES]; /**< match index of each feature, -1 for none */
+    double xn[SFD_MAX_FEATURES][2];          /**< normalized undistorted coordinates */
+    double uv[SFD_MAX_FEATURES][2];          /**< undistorted pixels */
+    uint8_t ok[SFD_MAX_FEATURES];            /**< undistortion succeeded */
+    /* the previous frame (observations kept for the next frame's matches) */
+    int32_t prev_n;
+    int64_t prev_track[SFD_MAX_FEATURES];
+    double prev_uv[SFD_MAX_FEATURES][2];
+    double prev_R_CtoW[9];
+    double prev_p_CinW_m[3];
+    int32_t have_prev;
+} sfd_nav_t;
+
+/** @brief Association method of the navigation side for a detector method: OPRF, RANSAC1,
+ *         RANSACF and NONE as themselves, BOTH -> OPRF, PARITY -> NONE (the filter is then updated
+ *         with the features parity accepted). */
+int32_t sfd_nav_assoc_method(int32_t detector_method);
+
+/** @brief Initializes the state. @return SFD_OK; SFD_ERR_INVAL for null or invalid values. */
+sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd_params_t *params);
+
+/** @brief A new calibration: the camera model of the EKF; landmarks and tracks start over. */
+void sfd_nav_set_camera(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_extrinsics_t *ext);
+
+/**
+ * @brief Brings the filter to @p t_us: starts it from gravity when it is not running (needs
+ *        init_rest_s of IMU before t_us), else propagates it with the ring's samples
+ *        (zero-order hold of each sample until the next, the last one until t_us).
+ * @return SFD_REJECT_NONE when the filter is at t_us and running; SFD_REJECT_IMU_GAP /
+ *         SFD_REJECT_IMU_LATE / SFD_REJECT_CAPACITY from the ring, or SFD_REJECT_CORE when the
+ *         filter refused (it is then stopped and restarts from gravity later; counted in
+ *         `starts`). SFD_REJECT_NONE also when it just started (no prior to associate yet).
+ */
+int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
+                    sfd_imu_sample_t *scratch, int32_t cap);
+
+/**
+ * @brief A TRUTH pose (init_from_truth only; ignored otherwise or once running): the first one
+ *        is kept, the second starts the filter at that pose with the velocity of the difference.
+ */
+void sfd_nav_truth(sfd_nav_t *nav, int64_t utime, const double p_m[3], const double q_wxyz[4]);
+
+/**
+ * @brief Matches of the frame: features (not excluded by @p skip, nullable) whose track was in
+ *        the previous frame and has a landmark. Fills nav->matches / match_feature /
+ *        feature_match; undistorts every feature with @p cam.
+ * @return the number of matches.
+ */
+int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *frame,
+                      const uint8_t *skip);
+
+/**
+ * @brief After the association: refines the landmarks of the features judged CONSISTENT with
+ *        the posterior camera pose (gated), creates landmarks for features without one (depth
+ *        prior or the default), drops landmarks unseen for landmark_max_age_s, and keeps the
+ *        non-SPURIOUS observations as the next frame's previous ones.
+ * @param status per feature, SFD_VERDICT_* (the frame's final verdicts).
+ */
+void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *status);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SFD_NODE_NAV_H */
