@@ -194,8 +194,10 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
                      {"landmark_max_age_s", &nv.landmark_max_age_s},
                      {"landmark_gate_alpha", &nv.landmark_gate_alpha},
                      {"min_parallax_px", &nv.min_parallax_px}};
-        const char *fints[] = {"enabled", "gyro_bias_at_rest", "init_from_truth"};
-        int32_t *fint_dst[] = {&nv.enabled, &nv.gyro_bias_at_rest, &nv.init_from_truth};
+        const char *fints[] = {"enabled", "gyro_bias_at_rest", "init_from_truth",
+                               "consider_position"};
+        int32_t *fint_dst[] = {&nv.enabled, &nv.gyro_bias_at_rest, &nv.init_from_truth,
+                               &nv.consider_position};
         for (const std::string &key : flt.keys()) {
             bool found = false;
             for (const FKey &k : fnums) found = found || key == k.name;
@@ -213,7 +215,7 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
             }
             *k.dst = d;
         }
-        for (int k = 0; k < 3; ++k) {
+        for (int k = 0; k < 4; ++k) {
             if (flt[fints[k]].empty()) continue;
             if (!read_int(flt[fints[k]], where(std::string("filter.") + fints[k]), &i, error)) {
                 return false;

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // sfd-node: the onboard process. Subscribes IMU, CAMERA_INFO and FEATURES on real LCM, runs the
 // node's message handling (drivers/lcm/sfd_node_core, the same code sfd-replay drives) and
-// publishes SFD_VERDICT and SFD_TIMING. Stops cleanly on SIGINT/SIGTERM and prints its counters.
+// publishes SFD_VERDICT, SFD_STATE (when the filter runs) and SFD_TIMING. Stops cleanly on
+// SIGINT/SIGTERM and prints its counters.
 #include <dlfcn.h>
 #include <lcm/lcm.h>
 
@@ -83,7 +84,8 @@ void usage(FILE *f) {
         "usage: sfd-node [--config F] [--lcm-url URL] [--method M]\n"
         "                [--imu-channel C] [--camera-info-channel C]\n"
         "                [--features-channel C] [--verdict-channel C] [--timing-channel C]\n"
-        "  Subscribes IMU, CAMERA_INFO, FEATURES; publishes SFD_VERDICT, SFD_TIMING.\n"
+        "  Subscribes IMU, CAMERA_INFO, FEATURES; publishes SFD_VERDICT, SFD_STATE,\n"
+        "  SFD_TIMING.\n"
         "  --config F    YAML configuration (apps/config/sfd.yaml documents every key)\n"
         "  --lcm-url     LCM provider (default udpm://239.255.76.67:7667?ttl=0)\n"
         "  --method M    none | parity\n"

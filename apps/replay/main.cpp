@@ -83,11 +83,14 @@ void usage(FILE *f) {
         "                  [--alpha A] [--window L] [--group n] [--pixel-sigma PX]\n"
         "                  [--depth-default M] [--no-isolation]\n"
         "  Plays IN through the node's code path as fast as possible.\n"
-        "  -o          write the input events and the published SFD_VERDICT/SFD_TIMING\n"
+        "  -o          write the input events and the published SFD_VERDICT/SFD_STATE/\n"
+        "              SFD_TIMING\n"
         "  --summary   JSON summary (scored against TRUTH when the log has it); wall-\n"
         "              clock timing goes to S.timing.json\n"
-        "  --method    none | parity (default parity; oprf, ransac1, ransacf, both arrive\n"
-        "              with the EKF)\n"
+        "  --method    none | parity | oprf | ransac1 | ransacf | both (default: the\n"
+        "              config's, parity); oprf, ransac1, ransacf, both need filter.enabled\n"
+        "  TRUTH in IN scores the verdicts and the SFD_STATE positions (RMSE); with\n"
+        "  filter.init_from_truth: 1 the filter starts from TRUTH instead of at rest.\n"
         "Exit: 0 ok, 2 bad usage or unreadable input, 1 internal failure.\n");
 }
 

@@ -518,7 +518,12 @@ sfd_status_t apply_pose_information(sfd_ekf_t *ekf, const PoseInformation &info_
         ekf->numeric_faults += 1U;
         return SFD_ERR_NUMERIC;
     }
-    const MatN6 U = Pxs * M;  // K = U H^T R^-1
+    MatN6 U = Pxs * M;  // K = U H^T R^-1
+    // Consider states: a zero gain row. K R K^T = U Y U^T and K H = U Y hold for any U, so the
+    // Joseph form below stays the exact covariance of this suboptimal gain.
+    for (int i = 0; i < N; ++i) {
+        if (ekf->consider[i] != 0U) U.row(i).setZero();
+    }
     const VecN dx = U * b;    // K nu
     const MatN6 KHs = U * Y;  // K H on the pose columns
     MatN Pn;

@@ -23,6 +23,7 @@ void sfd_nav_config_default(sfd_nav_config_t *cfg) {
     cfg->landmark_max_age_s = 2.0;
     cfg->landmark_gate_alpha = 0.001;
     cfg->min_parallax_px = 1.0;
+    cfg->consider_position = 1;
 }
 
 int32_t sfd_nav_assoc_method(int32_t detector_method) {
@@ -82,6 +83,16 @@ void sfd_nav_set_camera(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_extri
     nav->prev_n = 0;
 }
 
+/* Landmarks built from the filter's own poses carry no information on its absolute position:
+ * with consider_position the camera updates leave the position uncorrected (Schmidt consider
+ * state), so its covariance keeps growing with the velocity error instead of shrinking on
+ * re-used information (core/docs/ekf.md, "Consider states"). */
+static void set_consider(sfd_nav_t *nav) {
+    for (int k = 0; k < 3; ++k) {
+        nav->ekf.consider[SFD_EKF_IDX_P + k] = (uint8_t)(nav->cfg.consider_position ? 1 : 0);
+    }
+}
+
 /* Starts the filter from the IMU of [t - init_rest_s, t] (SPEC: at rest, gravity direction). */
 static int start_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
                          sfd_imu_sample_t *scratch, int32_t cap) {
@@ -111,6 +122,7 @@ static int start_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_u
     nav->ready = 1;
     nav->starts++;
     nav->have_prev = 0; /* no prior pose for the previous frame's matches */
+    set_consider(nav);
     return SFD_REJECT_NONE;
 }
 
@@ -138,6 +150,7 @@ void sfd_nav_truth(sfd_nav_t *nav, int64_t utime, const double p_m[3], const dou
     nav->ready = 1;
     nav->starts++;
     nav->have_prev = 0;
+    set_consider(nav);
 }
 
 int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,

@@ -42,12 +42,16 @@ typedef struct {
     double min_parallax_px;       /**< OPRF degenerate-motion threshold (sfd_assoc_params_t) */
     int32_t init_from_truth;      /**< evaluation only (SPEC): start from the first two TRUTH poses
                                        (velocity from their difference) instead of at rest */
+    int32_t consider_position;    /**< 1: camera updates do not correct the position (sfd_ekf_t
+                                       consider states): self-built landmarks hold no absolute
+                                       position information */
 } sfd_nav_config_t;
 
 /** @brief Defaults: enabled; sfd_ekf_noise_default(); P0 position 1e-6 m^2 (the origin is
  *         defined by the start), velocity 1e-4, attitude 1e-4 rad^2 (yaw 1e-6), gyro bias 1e-4,
  *         accel bias 1e-2; 0.5 s at rest with the gyro bias from it; unknown depth variance
- *         100 m^2; landmarks dropped after 2 s unseen; gate alpha 0.001; 1 px parallax. */
+ *         100 m^2; landmarks dropped after 2 s unseen; gate alpha 0.001; 1 px parallax; start
+ *         at rest (not from TRUTH); position as a consider state. */
 void sfd_nav_config_default(sfd_nav_config_t *cfg);
 
 typedef struct {

@@ -326,6 +326,71 @@ static void ekf_camera_update_equals_textbook_equations(void **state) {
     assert_true(is_spd(NX, ekf.P));
 }
 
+/* GIVEN position marked as a consider state WHEN updating with 5 observations THEN the position
+ * is not corrected and P equals the Joseph form of the textbook gain with its position rows zeroed,
+ * (I - K'H) P (I - K'H)^T + K' R K'^T, to rounding (a suboptimal gain keeps P exact). */
+static void ekf_consider_states_are_not_corrected_and_p_stays_exact(void **state) {
+    (void)state;
+    SFD_REQ("SFD-EKF-007");
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 15);
+    sfd_ekf_t ekf;
+    random_filter(&ekf, &rng);
+    for (int k = 0; k < 3; ++k) ekf.consider[SFD_EKF_IDX_P + k] = 1;
+    const sfd_ekf_camera_t cam = forward_camera();
+    enum { M = 5 };
+    sfd_ekf_obs_t obs[M];
+    for (int i = 0; i < M; ++i) obs[i] = observation_ahead(&ekf, &cam, &rng, 4.0 + i);
+    double H[2 * M * NX] = {0}, R[4 * M * M] = {0}, nu[2 * M];
+    for (int i = 0; i < M; ++i) {
+        double uv[2], Hp[12], Ri[4];
+        assert_status(sfd_ekf_predict_observation(&ekf, &cam, &obs[i], uv, Hp, Ri), SFD_OK);
+        for (int r = 0; r < 2; ++r) {
+            nu[2 * i + r] = obs[i].uv_px[r] - uv[r];
+            for (int k = 0; k < 3; ++k) {
+                H[(2 * i + r) * NX + SFD_EKF_IDX_P + k] = Hp[6 * r + k];
+                H[(2 * i + r) * NX + SFD_EKF_IDX_THETA + k] = Hp[6 * r + 3 + k];
+            }
+            for (int c = 0; c < 2; ++c) R[(2 * i + r) * 2 * M + 2 * i + c] = Ri[2 * r + c];
+        }
+    }
+    double Ht[NX * 2 * M], PHt[NX * 2 * M], S[4 * M * M], PHt_T[2 * M * NX], Kt[2 * M * NX] = {0};
+    double K[NX * 2 * M];
+    transpose(2 * M, NX, H, Ht);
+    matmul(NX, NX, 2 * M, ekf.P, Ht, PHt);
+    matmul(2 * M, NX, 2 * M, H, PHt, S);
+    for (int i = 0; i < 4 * M * M; ++i) S[i] += R[i];
+    transpose(NX, 2 * M, PHt, PHt_T);
+    assert_true(solve_dense(2 * M, NX, S, PHt_T, Kt));
+    transpose(2 * M, NX, Kt, K);
+    for (int k = 0; k < 3; ++k) {
+        for (int c = 0; c < 2 * M; ++c) K[(SFD_EKF_IDX_P + k) * 2 * M + c] = 0.0;
+    }
+    double KH[NX * NX], IKH[NX * NX], IKHt[NX * NX], A[NX * NX], Pref[NX * NX];
+    double KR[NX * 2 * M], Ktr[2 * M * NX], KRKt[NX * NX];
+    matmul(NX, 2 * M, NX, K, H, KH);
+    for (int i = 0; i < NX * NX; ++i) IKH[i] = ((i % (NX + 1)) == 0 ? 1.0 : 0.0) - KH[i];
+    transpose(NX, NX, IKH, IKHt);
+    matmul(NX, NX, NX, IKH, ekf.P, A);
+    matmul(NX, NX, NX, A, IKHt, Pref);
+    matmul(NX, 2 * M, 2 * M, K, R, KR);
+    transpose(NX, 2 * M, K, Ktr);
+    matmul(NX, 2 * M, NX, KR, Ktr, KRKt);
+    for (int i = 0; i < NX * NX; ++i) Pref[i] += KRKt[i];
+    const sfd_ekf_t before = ekf;
+    assert_status(sfd_ekf_update_camera(&ekf, &cam, obs, NULL, M, NULL), SFD_OK);
+    assert_memory_equal(ekf.p_IinW_m, before.p_IinW_m, sizeof ekf.p_IinW_m);
+    for (int i = 0; i < NX * NX; ++i) assert_near(ekf.P[i], Pref[i], 1e-10);
+    assert_true(is_spd(NX, ekf.P));
+    /* the other states are corrected by K' nu */
+    double dx[NX];
+    matmul(NX, 2 * M, 1, K, nu, dx);
+    for (int k = 0; k < 3; ++k) {
+        assert_near(ekf.v_IinW_m_s[k] - before.v_IinW_m_s[k], dx[SFD_EKF_IDX_V + k], 1e-10);
+        assert_near(ekf.ba_m_s2[k] - before.ba_m_s2[k], dx[SFD_EKF_IDX_BA + k], 1e-10);
+    }
+}
+
 /* GIVEN a generic pose WHEN perturbing position and orientation (R^ Exp(dtheta)) THEN the
  * predicted pixel changes as H_pose says, to second order. */
 static void ekf_camera_jacobian_matches_numerical_derivative(void **state) {
@@ -598,6 +663,7 @@ int main(void) {
         cmocka_unit_test(ekf_linear_case_equals_kalman_filter),
         cmocka_unit_test(ekf_camera_update_equals_textbook_equations),
         cmocka_unit_test(ekf_camera_jacobian_matches_numerical_derivative),
+        cmocka_unit_test(ekf_consider_states_are_not_corrected_and_p_stays_exact),
         cmocka_unit_test(ekf_nees_is_consistent_over_monte_carlo),
         cmocka_unit_test(ekf_starts_from_gravity_at_rest),
         cmocka_unit_test(ekf_rejects_bad_input_and_stays_unchanged),

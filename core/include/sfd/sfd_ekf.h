@@ -57,7 +57,11 @@ typedef struct {
     double ba_m_s2[3];
     double P[SFD_EKF_DIM * SFD_EKF_DIM]; /**< error-state covariance, row-major, SPD */
     sfd_ekf_noise_t noise;
-    uint32_t numeric_faults; /**< updates/propagations refused for numerical trouble */
+    uint32_t numeric_faults;       /**< updates/propagations refused for numerical trouble */
+    uint8_t consider[SFD_EKF_DIM]; /**< 1: the camera update does not correct this error state
+                                        (Schmidt "consider" state: its gain row is zero, its
+                                        covariance stays consistent through the Joseph form).
+                                        sfd_ekf_init() clears it. */
     int32_t initialized;
 } sfd_ekf_t;
 
