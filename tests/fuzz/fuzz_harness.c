@@ -87,12 +87,31 @@ static void check_timing(const void *data, int32_t size, int64_t utime) {
     }
 }
 
+/* SFD_STATE: after its frame's verdict, decodable, finite, a unit quaternion, variances >= 0. */
+static void check_nav_state(const void *data, int32_t size, int64_t utime) {
+    sfd_nav_state_t s;
+    FZ_CHECK(sfd_nav_state_t_decode(data, 0, size, &s) == size);
+    FZ_CHECK(g_chk.have_verdict && s.utime == g_chk.last_verdict_utime && utime == s.utime);
+    double qn = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        FZ_CHECK(isfinite(s.position[k]) && isfinite(s.velocity[k]));
+        FZ_CHECK(isfinite(s.position_var[k]) && s.position_var[k] >= 0.0);
+    }
+    for (int k = 0; k < 4; ++k) {
+        FZ_CHECK(isfinite(s.orientation[k]));
+        qn += s.orientation[k] * s.orientation[k];
+    }
+    FZ_CHECK(fabs(qn - 1.0) < 1e-6);
+}
+
 static void on_publish(void *ctx, sfd_node_output_t kind, const void *data, int32_t size,
                        int64_t utime) {
     (void)ctx;
     FZ_CHECK(data != NULL && size > 0 && size <= SFD_NODE_MAX_MESSAGE);
     if (kind == SFD_NODE_OUT_VERDICT) {
         check_verdict(data, size, utime);
+    } else if (kind == SFD_NODE_OUT_STATE) {
+        check_nav_state(data, size, utime);
     } else {
         FZ_CHECK(kind == SFD_NODE_OUT_TIMING);
         check_timing(data, size, utime);
