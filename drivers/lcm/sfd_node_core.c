@@ -167,7 +167,26 @@ static void run_parity(sfd_node_t *n, const sfd_frame_t *frame, int imu_reason) 
                                                                   : n->cfg.params.gyro_bias_rad_s;
         reason = sfd_assemble_motion(&n->ring, &n->ext, bias, n->prev_frame_utime, frame->utime,
                                      n->cfg.params.max_imu_gap_us, n->imu_scratch, &motion);
-        if (reason == SFD_REJECT_NONE) mp = &motion;
+        if (reason == SFD_REJECT_NONE) {
+            mp = &motion;
+            motion.translation_known = 0;
+            /* translation_known: the camera translation between the frames from the filter (the
+             * previous frame's posterior and this frame's prior), in the previous camera frame */
+            if (n->cfg.params.translation_known && n->cfg.nav.enabled && n->nav.ready &&
+                n->nav.have_prev) {
+                double R_CtoW[9], p_C[3];
+                sfd_ekf_camera_pose(&n->nav.ekf, &n->nav.ekf_cam.ext, R_CtoW, p_C);
+                const double *Rp = n->nav.prev_R_CtoW;
+                for (int r = 0; r < 3; ++r) {
+                    motion.p_CcurInCprev_m[r] = 0.0;
+                    for (int k = 0; k < 3; ++k) {
+                        motion.p_CcurInCprev_m[r] +=
+                            Rp[3 * k + r] * (p_C[k] - n->nav.prev_p_CinW_m[k]);
+                    }
+                }
+                motion.translation_known = 1;
+            }
+        }
     }
     if (n->have_prev_frame && mp == NULL) {
         /* No motion for this interval: the window cannot continue. Start a new one here. */
