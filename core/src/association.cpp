@@ -103,6 +103,20 @@ Gate gate_of(Score score, const sfd_assoc_t &a, double sigma2, double noise_px2)
     }
 }
 
+/// Sampson distance of eq. (25) in px^2 (as sfd_sampson_sq_px2, inlined for the hot loops).
+inline double sampson_px2(const double F[9], const double x1[2], const double x2[2]) {
+    const double u1 = x1[0], v1 = x1[1], u2 = x2[0], v2 = x2[1];
+    const double f0 = F[0] * u2 + F[1] * v2 + F[2];
+    const double f1 = F[3] * u2 + F[4] * v2 + F[5];
+    const double f2 = F[6] * u2 + F[7] * v2 + F[8];
+    const double g0 = F[0] * u1 + F[3] * v1 + F[6];
+    const double g1 = F[1] * u1 + F[4] * v1 + F[7];
+    const double e = u1 * f0 + v1 * f1 + f2;
+    const double den = f0 * f0 + f1 * f1 + g0 * g0 + g1 * g1;
+    const double d = (den > 0.0) ? e * e / den : std::numeric_limits<double>::infinity();
+    return std::isfinite(d) ? d : std::numeric_limits<double>::infinity();
+}
+
 /// Inliers of F among the packed matches (Sampson distance of eq. (25) <= thr, px^2, compared
 /// without division: e^2 <= thr * den); flags into @p flag. Stops early, returning a count below
 /// @p need, once even all remaining matches could not reach @p need (the flags are then partial
@@ -389,12 +403,16 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
         a.valid[i] = 0U;
         a.cur[i] = a.best[i] = a.rescued[i] = 0U;
         a.best_stat[i] = a.cur_stat[i] = 0.0F;
-        double c[3];
-        if (!all_finite(mt.prev_uv_px, 2) || !all_finite(mt.obs.uv_px, 2) ||
-            !all_finite(mt.obs.landmark_W_m, 3) || !all_finite(mt.obs.landmark_cov_m2, 9) ||
-            !lz.camera_point(mt.obs.landmark_W_m, c)) {
-            continue;
+        // All 16 inputs finite: x * 0 is 0 for a finite x and NaN otherwise (IEEE 754, no
+        // fast-math), so one test of the sum replaces 16.
+        double zero_if_finite = 0.0;
+        for (int k = 0; k < 2; ++k) {
+            zero_if_finite += mt.prev_uv_px[k] * 0.0 + mt.obs.uv_px[k] * 0.0;
         }
+        for (int k = 0; k < 3; ++k) zero_if_finite += mt.obs.landmark_W_m[k] * 0.0;
+        for (int k = 0; k < 9; ++k) zero_if_finite += mt.obs.landmark_cov_m2[k] * 0.0;
+        double c[3];
+        if (!std::isfinite(zero_if_finite) || !lz.camera_point(mt.obs.landmark_W_m, c)) continue;
         if (need_spread) {
             Linearized lin;
             if (!lz.linearize(mt.obs, &lin)) continue;
@@ -403,6 +421,10 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
             a.noise_px2[i] = sigma2;
         }
         a.valid[i] = 1U;
+        a.x_prev[nv][0] = mt.prev_uv_px[0];  // packed for the scoring loops
+        a.x_prev[nv][1] = mt.prev_uv_px[1];
+        a.x_curr[nv][0] = mt.obs.uv_px[0];
+        a.x_curr[nv][1] = mt.obs.uv_px[1];
         a.valid_idx[nv++] = i;
         inv_depth_sum += 1.0 / c[2];
     }
@@ -423,13 +445,6 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
         out->inliers_stage1 = nv;
     } else if (prm.method == SFD_METHOD_RANSACF) {
         a.stage = SFD_STAGE_RANSAC_F;
-        for (int32_t k = 0; k < nv; ++k) {
-            const sfd_match_t &mt = matches[a.valid_idx[k]];
-            a.x_prev[k][0] = mt.prev_uv_px[0];
-            a.x_prev[k][1] = mt.prev_uv_px[1];
-            a.x_curr[k][0] = mt.obs.uv_px[0];
-            a.x_curr[k][1] = mt.obs.uv_px[1];
-        }
         sfd_ransacf_result_t rf;
         // cur[] holds the compacted inlier flags of the nv valid matches.
         const sfd_status_t st = sfd_ransacf(a.x_prev, a.x_curr, nv, a.chi2_1 * sigma2,
@@ -469,15 +484,6 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
         const Mat6 Pss = pose_covariance(*ekf);
         // OPRF's Sampson scoring runs over packed pixel arrays of the valid matches.
         const bool packed = (score == Score::kSampson);
-        if (packed) {
-            for (int32_t k = 0; k < nv; ++k) {
-                const sfd_match_t &mt = matches[a.valid_idx[k]];
-                a.x_prev[k][0] = mt.prev_uv_px[0];
-                a.x_prev[k][1] = mt.prev_uv_px[1];
-                a.x_curr[k][0] = mt.obs.uv_px[0];
-                a.x_curr[k][1] = mt.obs.uv_px[1];
-            }
-        }
         const double thr_sampson = a.chi2_1 * sigma2;
         Model best_model{};
         int32_t best_count = -1;
@@ -516,7 +522,7 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
         if (packed && best_count >= 0) {  // the statistics of the best hypothesis, once
             const double inv_s2 = 1.0 / sigma2;
             for (int32_t k = 0; k < nv; ++k) {
-                const double d = sfd_sampson_sq_px2(best_model.F, a.x_prev[k], a.x_curr[k]);
+                const double d = sampson_px2(best_model.F, a.x_prev[k], a.x_curr[k]);
                 const double st = d * inv_s2;
                 a.best_stat[a.valid_idx[k]] = static_cast<float>((st < 3.0e38) ? st : 3.0e38);
             }
