@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# integration.install_consumer: `cmake --install` of the build into a scratch prefix, then
+# examples/consumer is configured and built against the installed tree twice, through
+# find_package(sfd) (CMake package, sfd::core) and through pkg-config (sfd.pc), and both run.
+# usage: install_consumer.sh BUILD_DIR SOURCE_DIR
+set -euo pipefail
+build="$1"; src="$2"
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+cmake --install "$build" --prefix "$tmp/prefix" --component Unspecified >/dev/null
+test -f "$tmp/prefix/include/sfd/sfd.h"
+test -f "$tmp/prefix/lib/libsfd_core.a" || test -f "$tmp/prefix/lib64/libsfd_core.a"
+cmake -S "$src/examples/consumer" -B "$tmp/b" -DCMAKE_PREFIX_PATH="$tmp/prefix" >/dev/null
+cmake --build "$tmp/b" >/dev/null
+"$tmp/b/sfd_consumer"
+libdir="$(dirname "$(find "$tmp/prefix" -name sfd.pc | head -1)")"
+flags="$(PKG_CONFIG_PATH="$libdir" pkg-config --define-prefix --cflags --libs --static sfd)"
+# shellcheck disable=SC2086
+cc -o "$tmp/consumer_pc" "$src/examples/consumer/main.c" $flags
+"$tmp/consumer_pc"
+echo "install_consumer: find_package(sfd) and pkg-config consumers built and ran"
