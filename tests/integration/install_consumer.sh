@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# integration.install_consumer: `cmake --install` of the build into a scratch prefix, then
+# integration.install_consumer: `cmake --install` of the build into a scratch prefix (core
+# package, node, configuration, systemd unit), then
 # examples/consumer is configured and built against the installed tree twice, through
 # find_package(sfd) (CMake package, sfd::core) and through pkg-config (sfd.pc), and both run.
 # usage: install_consumer.sh BUILD_DIR SOURCE_DIR
@@ -11,6 +12,16 @@ trap 'rm -rf "$tmp"' EXIT
 cmake --install "$build" --prefix "$tmp/prefix" --component Unspecified >/dev/null
 test -f "$tmp/prefix/include/sfd/sfd.h"
 test -f "$tmp/prefix/lib/libsfd_core.a" || test -f "$tmp/prefix/lib64/libsfd_core.a"
+# deployment files: the node, its configuration, the systemd unit pointing at both, the doc
+test -x "$tmp/prefix/bin/sfd-node"
+test -f "$tmp/prefix/etc/sfd/sfd.yaml"
+grep -q "^ExecStart=$tmp/prefix/bin/sfd-node --config $tmp/prefix/etc/sfd/sfd.yaml$" \
+  "$tmp/prefix/share/sfd/sfd-node.service"
+test -f "$tmp/prefix/share/sfd/deploy.md"
+"$tmp/prefix/bin/sfd-node" --help >/dev/null
+# the installed configuration is one the node accepts (it fails on any unknown/invalid key)
+"$tmp/prefix/bin/sfd-replay" "$src/tests/replay/golden.lcmlog" \
+  --config "$tmp/prefix/etc/sfd/sfd.yaml" >/dev/null
 cmake -S "$src/examples/consumer" -B "$tmp/b" -DCMAKE_PREFIX_PATH="$tmp/prefix" >/dev/null
 cmake --build "$tmp/b" >/dev/null
 "$tmp/b/sfd_consumer"
