@@ -4,6 +4,7 @@
 // Readings chosen where the thesis is ambiguous: core/docs/association.md.
 #include "ekf.hpp"
 #include "rotation.hpp"
+#include "sampson.hpp"
 #include "sfd/sfd_assoc.h"
 #include "sfd/sfd_chi2.h"
 #include "sfd/sfd_fundamental.h"
@@ -63,7 +64,7 @@ Model make_model(const sfd_ekf_camera_t &cam, const CameraPose &prev, const Mat3
 double distance_px2(Score score, const sfd_ekf_camera_t &cam, const Model &model,
                     const sfd_match_t &mt) {
     const double inf = std::numeric_limits<double>::infinity();
-    if (score == Score::kSampson) return sfd_sampson_sq_px2(model.F, mt.prev_uv_px, mt.obs.uv_px);
+    if (score == Score::kSampson) return sampson_px2(model.F, mt.prev_uv_px, mt.obs.uv_px);
     if (score == Score::kTransfer) {
         const Vec3 x = model.H_inf * Vec3(mt.prev_uv_px[0], mt.prev_uv_px[1], 1.0);
         if (!(std::fabs(x.z()) > 1e-12)) return inf;
@@ -103,20 +104,6 @@ Gate gate_of(Score score, const sfd_assoc_t &a, double sigma2, double noise_px2)
     }
 }
 
-/// Sampson distance of eq. (25) in px^2 (as sfd_sampson_sq_px2, inlined for the hot loops).
-inline double sampson_px2(const double F[9], const double x1[2], const double x2[2]) {
-    const double u1 = x1[0], v1 = x1[1], u2 = x2[0], v2 = x2[1];
-    const double f0 = F[0] * u2 + F[1] * v2 + F[2];
-    const double f1 = F[3] * u2 + F[4] * v2 + F[5];
-    const double f2 = F[6] * u2 + F[7] * v2 + F[8];
-    const double g0 = F[0] * u1 + F[3] * v1 + F[6];
-    const double g1 = F[1] * u1 + F[4] * v1 + F[7];
-    const double e = u1 * f0 + v1 * f1 + f2;
-    const double den = f0 * f0 + f1 * f1 + g0 * g0 + g1 * g1;
-    const double d = (den > 0.0) ? e * e / den : std::numeric_limits<double>::infinity();
-    return std::isfinite(d) ? d : std::numeric_limits<double>::infinity();
-}
-
 /// Inliers of F among the packed matches (Sampson distance of eq. (25) <= thr, px^2, compared
 /// without division: e^2 <= thr * den); flags into @p flag. Stops early, returning a count below
 /// @p need, once even all remaining matches could not reach @p need (the flags are then partial
@@ -126,14 +113,9 @@ int32_t sampson_count(const double F[9], const double (*x1)[2], const double (*x
     int32_t count = 0;
     for (int32_t k = 0; k < nv; ++k) {
         if (count + (nv - k) < need) return count;
-        const double u1 = x1[k][0], v1 = x1[k][1], u2 = x2[k][0], v2 = x2[k][1];
-        const double f0 = F[0] * u2 + F[1] * v2 + F[2];
-        const double f1 = F[3] * u2 + F[4] * v2 + F[5];
-        const double f2 = F[6] * u2 + F[7] * v2 + F[8];
-        const double g0 = F[0] * u1 + F[3] * v1 + F[6];
-        const double g1 = F[1] * u1 + F[4] * v1 + F[7];
-        const double e = u1 * f0 + v1 * f1 + f2;
-        const double den = f0 * f0 + f1 * f1 + g0 * g0 + g1 * g1;
+        double e = 0.0;
+        double den = 0.0;
+        sampson_terms(F, x1[k], x2[k], &e, &den);
         const uint8_t in = (den > 0.0 && e * e <= thr * den) ? 1U : 0U;
         flag[k] = in;
         count += in;
@@ -142,37 +124,12 @@ int32_t sampson_count(const double F[9], const double (*x1)[2], const double (*x
 }
 
 /// Scores every valid match (restricted to @p only when given) under @p model into a.cur /
-/// a.cur_stat; returns the inlier count. One loop per distance, with the threshold hoisted.
+/// a.cur_stat; returns the inlier count. (The hypothesis loop scores OPRF's Sampson distance with
+/// sampson_count() over packed arrays; this serves the stage-2 rescue and the other distances.)
 int32_t score_all(sfd_assoc_t *a, Score score, const sfd_ekf_camera_t &cam, const Model &model,
                   const sfd_match_t *m, int32_t n, const uint8_t *only) {
     const double sigma2 = cam.pixel_sigma_px * cam.pixel_sigma_px;
     int32_t count = 0;
-    if (score == Score::kSampson) {
-        // Sampson distance of eq. (25) in px^2, inlined: F x_cur, F^T x_prev, x_prev^T F x_cur.
-        const double *F = model.F;
-        const double thr = a->chi2_1 * sigma2;
-        const double inv_unit = 1.0 / sigma2;
-        for (int32_t i = 0; i < n; ++i) {
-            a->cur[i] = 0U;
-            if (a->valid[i] == 0U || (only != nullptr && only[i] == 0U)) continue;
-            const double u1 = m[i].prev_uv_px[0], v1 = m[i].prev_uv_px[1];
-            const double u2 = m[i].obs.uv_px[0], v2 = m[i].obs.uv_px[1];
-            const double f0 = F[0] * u2 + F[1] * v2 + F[2];
-            const double f1 = F[3] * u2 + F[4] * v2 + F[5];
-            const double f2 = F[6] * u2 + F[7] * v2 + F[8];
-            const double g0 = F[0] * u1 + F[3] * v1 + F[6];
-            const double g1 = F[1] * u1 + F[4] * v1 + F[7];
-            const double e = u1 * f0 + v1 * f1 + f2;
-            const double den = f0 * f0 + f1 * f1 + g0 * g0 + g1 * g1;
-            const double d = (den > 0.0) ? e * e / den : std::numeric_limits<double>::infinity();
-            a->cur_stat[i] = static_cast<float>(std::fmin(d * inv_unit, 3.0e38));
-            if (d <= thr) {
-                a->cur[i] = 1U;
-                ++count;
-            }
-        }
-        return count;
-    }
     for (int32_t i = 0; i < n; ++i) {
         a->cur[i] = 0U;
         if (a->valid[i] == 0U || (only != nullptr && only[i] == 0U)) continue;
@@ -462,7 +419,7 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
             for (int32_t k = 0; k < nv; ++k) {
                 const int32_t i = a.valid_idx[k];
                 a.best[i] = a.cur[k];
-                const double d = sfd_sampson_sq_px2(rf.F, a.x_prev[k], a.x_curr[k]);
+                const double d = sampson_px2(rf.F, a.x_prev[k], a.x_curr[k]);
                 a.best_stat[i] = static_cast<float>(std::fmin(d / sigma2, 3.0e38));
             }
         }

@@ -2,6 +2,7 @@
 // Fundamental-matrix RANSAC baseline, Kilic 2014 Section 3.1.2 / Table 2 (sfd/sfd_fundamental.h,
 // core/docs/fundamental_matrix.md).
 #include "core_private.hpp"
+#include "sampson.hpp"
 #include "sfd/sfd_fundamental.h"
 #include "sfd/sfd_ransac.h"
 
@@ -143,27 +144,12 @@ bool hartley_normalization(const double (*x)[2], const int32_t *idx, int32_t n, 
     return true;
 }
 
-/// Sampson error, see sfd_sampson_sq_px2(). Inline so the RANSAC scoring loop pays no call.
-inline double sampson(const double *F, const double *x1, const double *x2) {
-    // F x2 and F^T x1 with the homogeneous 1 folded in.
-    const double fx0 = F[0] * x2[0] + F[1] * x2[1] + F[2];
-    const double fx1 = F[3] * x2[0] + F[4] * x2[1] + F[5];
-    const double fx2 = F[6] * x2[0] + F[7] * x2[1] + F[8];
-    const double ft0 = F[0] * x1[0] + F[3] * x1[1] + F[6];
-    const double ft1 = F[1] * x1[0] + F[4] * x1[1] + F[7];
-    const double e = x1[0] * fx0 + x1[1] * fx1 + fx2;  // x1^T F x2, eq. (25)
-    const double den = fx0 * fx0 + fx1 * fx1 + ft0 * ft0 + ft1 * ft1;
-    if (!(den > 0.0)) return std::numeric_limits<double>::infinity();  // also NaN
-    const double d = e * e / den;
-    return std::isfinite(d) ? d : std::numeric_limits<double>::infinity();
-}
-
 /// inlier[i] = (Sampson distance of match i <= threshold); returns the count.
 int32_t score(const double *F, const double (*x_prev)[2], const double (*x_curr)[2], int32_t n,
               double threshold_sq_px2, uint8_t *inlier) {
     int32_t count = 0;
     for (int32_t i = 0; i < n; ++i) {
-        const bool in = sampson(F, x_prev[i], x_curr[i]) <= threshold_sq_px2;
+        const bool in = sfd::sampson_px2(F, x_prev[i], x_curr[i]) <= threshold_sq_px2;
         inlier[i] = in ? 1U : 0U;
         count += in ? 1 : 0;
     }
@@ -271,7 +257,7 @@ extern "C" double sfd_sampson_sq_px2(const double F[9], const double x_prev[2],
     if (F == nullptr || x_prev == nullptr || x_curr == nullptr) {
         return std::numeric_limits<double>::infinity();
     }
-    return sfd::fmat::sampson(F, x_prev, x_curr);
+    return sfd::sampson_px2(F, x_prev, x_curr);
 }
 
 // Table 2, with the hypothesis count of eq. (27) and a final least-squares refit (sfd addition).

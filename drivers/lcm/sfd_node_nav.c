@@ -86,8 +86,12 @@ void sfd_nav_set_camera(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_extri
 /* Landmarks built from the filter's own poses carry no information on its absolute position:
  * with consider_position the camera updates leave the position uncorrected (Schmidt consider
  * state), so its covariance keeps growing with the velocity error instead of shrinking on
- * re-used information (core/docs/ekf.md, "Consider states"). */
-static void set_consider(sfd_nav_t *nav) {
+ * re-used information (core/docs/ekf.md, "Consider states"). Called once the filter (re)starts. */
+static void started(sfd_nav_t *nav, int64_t utime) {
+    nav->ekf_utime = utime;
+    nav->ready = 1;
+    nav->starts++;
+    nav->have_prev = 0; /* no prior pose for the previous frame's matches */
     for (int k = 0; k < 3; ++k) {
         nav->ekf.consider[SFD_EKF_IDX_P + k] = (uint8_t)(nav->cfg.consider_position ? 1 : 0);
     }
@@ -118,11 +122,7 @@ static int start_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_u
         SFD_OK) {
         return SFD_REJECT_CORE; /* not at rest (or bad values): try again at the next frame */
     }
-    nav->ekf_utime = t_us;
-    nav->ready = 1;
-    nav->starts++;
-    nav->have_prev = 0; /* no prior pose for the previous frame's matches */
-    set_consider(nav);
+    started(nav, t_us);
     return SFD_REJECT_NONE;
 }
 
@@ -146,11 +146,7 @@ void sfd_nav_truth(sfd_nav_t *nav, int64_t utime, const double p_m[3], const dou
         nav->have_truth0 = 0;
         return;
     }
-    nav->ekf_utime = utime;
-    nav->ready = 1;
-    nav->starts++;
-    nav->have_prev = 0;
-    set_consider(nav);
+    started(nav, utime);
 }
 
 int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,

@@ -259,6 +259,37 @@ static sfd_ekf_obs_t observation_ahead(const sfd_ekf_t *ekf, const sfd_ekf_camer
     return o;
 }
 
+/* The dense textbook quantities of eqs. (19)-(22) for M observations: stacked H (2M x 15), the
+ * block-diagonal R, the innovation nu, S = H P H^T + R and the gain K = P H^T S^-1. */
+enum { TB_M = 5 };
+static void textbook_system(const sfd_ekf_t *ekf, const sfd_ekf_camera_t *cam,
+                            const sfd_ekf_obs_t *obs, double *H, double *R, double *nu, double *S,
+                            double *K) {
+    enum { M = TB_M };
+    memset(H, 0, sizeof(double) * 2 * M * NX);
+    memset(R, 0, sizeof(double) * 4 * M * M);
+    for (int i = 0; i < M; ++i) {
+        double uv[2], Hp[12], Ri[4];
+        assert_status(sfd_ekf_predict_observation(ekf, cam, &obs[i], uv, Hp, Ri), SFD_OK);
+        for (int r = 0; r < 2; ++r) {
+            nu[2 * i + r] = obs[i].uv_px[r] - uv[r];
+            for (int k = 0; k < 3; ++k) {
+                H[(2 * i + r) * NX + SFD_EKF_IDX_P + k] = Hp[6 * r + k];
+                H[(2 * i + r) * NX + SFD_EKF_IDX_THETA + k] = Hp[6 * r + 3 + k];
+            }
+            for (int c = 0; c < 2; ++c) R[(2 * i + r) * 2 * M + 2 * i + c] = Ri[2 * r + c];
+        }
+    }
+    double Ht[NX * 2 * M], PHt[NX * 2 * M], PHt_T[2 * M * NX], Kt[2 * M * NX] = {0};
+    transpose(2 * M, NX, H, Ht);
+    matmul(NX, NX, 2 * M, ekf->P, Ht, PHt);
+    matmul(2 * M, NX, 2 * M, H, PHt, S);
+    for (int i = 0; i < 4 * M * M; ++i) S[i] += R[i];
+    transpose(NX, 2 * M, PHt, PHt_T);
+    assert_true(solve_dense(2 * M, NX, S, PHt_T, Kt));
+    transpose(2 * M, NX, Kt, K);
+}
+
 /* GIVEN a random SPD prior and 5 observations WHEN updating THEN state and covariance equal the
  * dense textbook eqs. (19)-(21), K = P H^T (H P H^T + R)^-1, P+ = (I - K H) P, to rounding. */
 static void ekf_camera_update_equals_textbook_equations(void **state) {
@@ -269,32 +300,12 @@ static void ekf_camera_update_equals_textbook_equations(void **state) {
     sfd_ekf_t ekf;
     random_filter(&ekf, &rng);
     const sfd_ekf_camera_t cam = forward_camera();
-    enum { M = 5 };
+    enum { M = TB_M };
     sfd_ekf_obs_t obs[M];
     for (int i = 0; i < M; ++i) obs[i] = observation_ahead(&ekf, &cam, &rng, 4.0 + i);
     /* dense H (2M x 15), R (2M x 2M), residual */
-    double H[2 * M * NX] = {0}, R[4 * M * M] = {0}, nu[2 * M];
-    for (int i = 0; i < M; ++i) {
-        double uv[2], Hp[12], Ri[4];
-        assert_status(sfd_ekf_predict_observation(&ekf, &cam, &obs[i], uv, Hp, Ri), SFD_OK);
-        for (int r = 0; r < 2; ++r) {
-            nu[2 * i + r] = obs[i].uv_px[r] - uv[r];
-            for (int k = 0; k < 3; ++k) {
-                H[(2 * i + r) * NX + SFD_EKF_IDX_P + k] = Hp[6 * r + k];
-                H[(2 * i + r) * NX + SFD_EKF_IDX_THETA + k] = Hp[6 * r + 3 + k];
-            }
-            for (int c = 0; c < 2; ++c) R[(2 * i + r) * 2 * M + 2 * i + c] = Ri[2 * r + c];
-        }
-    }
-    double Ht[NX * 2 * M], PHt[NX * 2 * M], S[4 * M * M], PHt_T[2 * M * NX], Kt[2 * M * NX] = {0};
-    double K[NX * 2 * M];
-    transpose(2 * M, NX, H, Ht);
-    matmul(NX, NX, 2 * M, ekf.P, Ht, PHt);
-    matmul(2 * M, NX, 2 * M, H, PHt, S);
-    for (int i = 0; i < 4 * M * M; ++i) S[i] += R[i];
-    transpose(NX, 2 * M, PHt, PHt_T);
-    assert_true(solve_dense(2 * M, NX, S, PHt_T, Kt));
-    transpose(2 * M, NX, Kt, K);
+    double H[2 * M * NX], R[4 * M * M], nu[2 * M], S[4 * M * M], K[NX * 2 * M];
+    textbook_system(&ekf, &cam, obs, H, R, nu, S, K);
     double dx[NX], KH[NX * NX], IKH[NX * NX], Pref[NX * NX];
     matmul(NX, 2 * M, 1, K, nu, dx);
     matmul(NX, 2 * M, NX, K, H, KH);
@@ -338,31 +349,11 @@ static void ekf_consider_states_are_not_corrected_and_p_stays_exact(void **state
     random_filter(&ekf, &rng);
     for (int k = 0; k < 3; ++k) ekf.consider[SFD_EKF_IDX_P + k] = 1;
     const sfd_ekf_camera_t cam = forward_camera();
-    enum { M = 5 };
+    enum { M = TB_M };
     sfd_ekf_obs_t obs[M];
     for (int i = 0; i < M; ++i) obs[i] = observation_ahead(&ekf, &cam, &rng, 4.0 + i);
-    double H[2 * M * NX] = {0}, R[4 * M * M] = {0}, nu[2 * M];
-    for (int i = 0; i < M; ++i) {
-        double uv[2], Hp[12], Ri[4];
-        assert_status(sfd_ekf_predict_observation(&ekf, &cam, &obs[i], uv, Hp, Ri), SFD_OK);
-        for (int r = 0; r < 2; ++r) {
-            nu[2 * i + r] = obs[i].uv_px[r] - uv[r];
-            for (int k = 0; k < 3; ++k) {
-                H[(2 * i + r) * NX + SFD_EKF_IDX_P + k] = Hp[6 * r + k];
-                H[(2 * i + r) * NX + SFD_EKF_IDX_THETA + k] = Hp[6 * r + 3 + k];
-            }
-            for (int c = 0; c < 2; ++c) R[(2 * i + r) * 2 * M + 2 * i + c] = Ri[2 * r + c];
-        }
-    }
-    double Ht[NX * 2 * M], PHt[NX * 2 * M], S[4 * M * M], PHt_T[2 * M * NX], Kt[2 * M * NX] = {0};
-    double K[NX * 2 * M];
-    transpose(2 * M, NX, H, Ht);
-    matmul(NX, NX, 2 * M, ekf.P, Ht, PHt);
-    matmul(2 * M, NX, 2 * M, H, PHt, S);
-    for (int i = 0; i < 4 * M * M; ++i) S[i] += R[i];
-    transpose(NX, 2 * M, PHt, PHt_T);
-    assert_true(solve_dense(2 * M, NX, S, PHt_T, Kt));
-    transpose(2 * M, NX, Kt, K);
+    double H[2 * M * NX], R[4 * M * M], nu[2 * M], S[4 * M * M], K[NX * 2 * M];
+    textbook_system(&ekf, &cam, obs, H, R, nu, S, K);
     for (int k = 0; k < 3; ++k) {
         for (int c = 0; c < 2 * M; ++c) K[(SFD_EKF_IDX_P + k) * 2 * M + c] = 0.0;
     }
