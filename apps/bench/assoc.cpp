@@ -30,6 +30,8 @@ sfd_assoc_result_t g_res;
 struct Stats {
     std::vector<double> us;        // association (sfd: sfd_assoc_select; OpenCV: the call)
     std::vector<double> total_us;  // sfd: select + apply (the EKF update and the rescue)
+    std::vector<double> hyps;      // sfd OPRF / RANSAC1 / RANSACF: hypotheses drawn per frame
+    long exhausted = 0;            // frames where eq. (27) asked for the whole budget
     long tp = 0, fp = 0, fn = 0, tn = 0;
     void add(double t_us, double t_total_us, const std::vector<uint8_t> &flagged,
              const sim_pair_t &pr) {
@@ -52,6 +54,12 @@ struct Stats {
         return s[std::min(k, s.size() - 1)];
     }
     double pct(double q) const { return pct_of(us, q); }
+    std::string hyp_text() const {
+        if (hyps.empty()) return "-";
+        char b[64];
+        std::snprintf(b, sizeof b, "%.0f / %.0f", pct_of(hyps, 0.5), pct_of(hyps, 1.0));
+        return b;
+    }
     double pct_total(double q) const { return pct_of(total_us, q); }
     double precision() const { return (tp + fp) ? double(tp) / double(tp + fp) : 1.0; }
     double recall() const { return (tp + fn) ? double(tp) / double(tp + fn) : 1.0; }
@@ -97,6 +105,10 @@ bool run_method(const Method &m, const sim_pair_t &pr, uint64_t seed, Stats *st)
             flagged[size_t(i)] = (g_res.status[i] == SFD_VERDICT_SPURIOUS);
         }
         st->add(t1 - t0, t2 - t0, flagged, pr);
+        if (m.sfd_method != SFD_METHOD_NONE) {
+            st->hyps.push_back(double(g_res.hypotheses_used));
+            st->exhausted += g_res.budget_exhausted;
+        }
         return true;
     }
     std::vector<cv::Point2f> a(size_t(pr.n)), b(size_t(pr.n));
@@ -125,11 +137,13 @@ bool run_method(const Method &m, const sim_pair_t &pr, uint64_t seed, Stats *st)
 void usage_assoc(FILE *f) {
     std::fprintf(
         f,
-        "usage: sfd-bench assoc [--trials T] [--seed S] [--csv FILE] [--quick] [--sfd-only]\n"
-        "                       [--only STR]\n"
+        "usage: sfd-bench assoc [--trials T] [--seed S] [--csv FILE] [--quick | --worst-case]\n"
+        "                       [--sfd-only] [--only STR]\n"
         "  Same correspondences for every method; N in {50,100,200,500}, outlier ratio\n"
         "  {0,0.1,0.3,0.5}, pixel noise {0.5,1} px, random and structured outliers.\n"
         "  --quick: only N=200, 30%% outliers, 1 px (the SPEC's headline case).\n"
+        "  --worst-case: N=SFD_MAX_FEATURES, 100%% random outliers, 1 px: the hypothesis\n"
+        "  budget is spent every frame (column 'hypotheses': median / max per frame).\n"
         "  --sfd-only: sfd's methods only; --only STR: methods whose name contains STR\n"
         "  (for profiling, e.g. valgrind --tool=callgrind ... --only OPRF).\n"
         "  Prints a markdown table; --csv writes every row.\n");
@@ -142,6 +156,7 @@ int bench_assoc(int argc, char **argv) {
     uint64_t seed = 1;
     const char *csv = nullptr;
     bool quick = false;
+    bool worst = false;  // SFD_MAX_FEATURES matches, all outliers
     bool sfd_only = false;  // skip OpenCV (profiling sfd under callgrind)
     std::string only;       // keep the methods whose name contains this
     for (int i = 2; i < argc; ++i) {
@@ -160,6 +175,8 @@ int bench_assoc(int argc, char **argv) {
             csv = argv[++i];
         } else if (!std::strcmp(a, "--quick")) {
             quick = true;
+        } else if (!std::strcmp(a, "--worst-case")) {
+            worst = true;
         } else if (!std::strcmp(a, "--sfd-only")) {
             sfd_only = true;
         } else if (!std::strcmp(a, "--only") && i + 1 < argc) {
@@ -208,7 +225,8 @@ int bench_assoc(int argc, char **argv) {
         }
         std::fprintf(fc,
                      "N,outlier_ratio,sigma_px,outliers,method,median_us,p99_us,"
-                     "median_with_update_us,precision,recall,f1\n");
+                     "median_with_update_us,precision,recall,f1,hyp_median,hyp_max,"
+                     "budget_exhausted_frames\n");
     }
     std::printf("sfd-bench assoc: %d trials per configuration, seed %llu, OpenCV %s\n", trials,
                 static_cast<unsigned long long>(seed), CV_VERSION);
@@ -217,18 +235,23 @@ int bench_assoc(int argc, char **argv) {
         "'+ update' column adds sfd_assoc_apply: EKF update with set 1, rescue, set 2.\n\n");
     std::printf(
         "| N | outliers | sigma | kind | method | median (us) | p99 (us) | + update median "
-        "(us) | precision | recall | F1 |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
-    const std::vector<int> Ns = quick ? std::vector<int>{200} : std::vector<int>{50, 100, 200, 500};
-    const std::vector<double> ratios =
+        "(us) | precision | recall | F1 | hypotheses |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::vector<int> Ns = quick ? std::vector<int>{200} : std::vector<int>{50, 100, 200, 500};
+    std::vector<double> ratios =
         quick ? std::vector<double>{0.3} : std::vector<double>{0.0, 0.1, 0.3, 0.5};
-    const std::vector<double> sigmas =
-        quick ? std::vector<double>{1.0} : std::vector<double>{0.5, 1.0};
+    std::vector<double> sigmas = quick ? std::vector<double>{1.0} : std::vector<double>{0.5, 1.0};
+    if (worst) {
+        Ns = {SFD_MAX_FEATURES};
+        ratios = {1.0};
+        sigmas = {1.0};
+    }
     for (int N : Ns) {
         if (N > SFD_MAX_FEATURES) continue;
         for (double ratio : ratios) {
             for (double sigma : sigmas) {
                 for (int structured : {0, 1}) {
-                    if (structured && ratio == 0.0) continue;
+                    if (structured && (ratio == 0.0 || worst)) continue;
                     std::vector<Stats> st(methods.size());
                     for (int t = 0; t < trials; ++t) {
                         sim_pair_opts_t o = sim_pair_default_opts();
@@ -254,14 +277,17 @@ int bench_assoc(int argc, char **argv) {
                         Stats &x = st[k];
                         std::printf(
                             "| %d | %.0f%% | %.1f | %s | %s | %.1f | %.1f | %.1f | %.3f | "
-                            "%.3f | %.3f |\n",
+                            "%.3f | %.3f | %s |\n",
                             N, 100 * ratio, sigma, kind, methods[k].name.c_str(), x.pct(0.5),
-                            x.pct(0.99), x.pct_total(0.5), x.precision(), x.recall(), x.f1());
+                            x.pct(0.99), x.pct_total(0.5), x.precision(), x.recall(), x.f1(),
+                            x.hyp_text().c_str());
                         if (fc != nullptr) {
-                            std::fprintf(fc, "%d,%.2f,%.2f,%s,%s,%.3f,%.3f,%.3f,%.5f,%.5f,%.5f\n",
-                                         N, ratio, sigma, kind, methods[k].name.c_str(), x.pct(0.5),
-                                         x.pct(0.99), x.pct_total(0.5), x.precision(), x.recall(),
-                                         x.f1());
+                            std::fprintf(
+                                fc, "%d,%.2f,%.2f,%s,%s,%.3f,%.3f,%.3f,%.5f,%.5f,%.5f,%.0f,%.0f,%ld\n",
+                                N, ratio, sigma, kind, methods[k].name.c_str(), x.pct(0.5),
+                                x.pct(0.99), x.pct_total(0.5), x.precision(), x.recall(), x.f1(),
+                                Stats::pct_of(x.hyps, 0.5), Stats::pct_of(x.hyps, 1.0),
+                                x.exhausted);
                         }
                     }
                 }

@@ -25,6 +25,7 @@ enum class Score {
 struct Model {
     CameraPose cur;  ///< current camera pose
     double F[9];     ///< eq. (26), x_prev^T F x_curr = 0 (kSampson)
+    float E[9];      ///< K^T F K = R [R^T t]x scaled to unit largest entry, single precision
     Mat3 H_inf;      ///< K R_CprevToCcur K^-1 (kTransfer)
 };
 
@@ -41,21 +42,27 @@ Mat3 intrinsics_inverse(const sfd_ekf_camera_t &cam) {
     return Ki;
 }
 
+/// Which parts of a Model to build: the single-precision E only (OPRF's hypothesis loop) or all.
+enum class Parts { kEpipolarOnly, kAll };
+
 /// Builds the scoring model of a current IMU pose. With X_prev = R X_cur + t the coordinates of a
 /// point in the previous and current cameras, R = R_WtoCprev R_CcurToW and t = R_WtoCprev
 /// (p_Ccur - p_Cprev); then x_prev^T [t]x R x_cur = 0, and [t]x R = R [R^T t]x gives eq. (26):
-/// F = K^-T R [R^T t]x K^-1.
+/// F = K^-T R [R^T t]x K^-1, E = R [R^T t]x its normalized-coordinate form.
 Model make_model(const sfd_ekf_camera_t &cam, const CameraPose &prev, const Mat3 &R_ItoW,
-                 const Vec3 &p_IinW) {
-    Model m;
+                 const Vec3 &p_IinW, Parts parts) {
+    Model m{};
     m.cur = camera_pose(R_ItoW, p_IinW, cam.ext);
     const Mat3 R = prev.R_WtoC * m.cur.R_WtoC.transpose();
     const Vec3 t = prev.R_WtoC * (m.cur.p_CinW - prev.p_CinW);
+    const Mat3 E = R * skew(R.transpose() * t);
+    const double e_max = E.cwiseAbs().maxCoeff();
+    const double e_scale = (e_max > 0.0 && std::isfinite(e_max)) ? 1.0 / e_max : 0.0;
+    for (int k = 0; k < 9; ++k) m.E[k] = static_cast<float>(E(k / 3, k % 3) * e_scale);
+    if (parts == Parts::kEpipolarOnly) return m;
     const Mat3 Ki = intrinsics_inverse(cam);
-    const Mat3 F = Ki.transpose() * R * skew(R.transpose() * t) * Ki;
-    for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) m.F[3 * r + c] = F(r, c);
-    }
+    const Mat3 F = Ki.transpose() * E * Ki;
+    for (int k = 0; k < 9; ++k) m.F[k] = F(k / 3, k % 3);
     m.H_inf = intrinsics(cam) * R.transpose() * Ki;
     return m;
 }
@@ -104,28 +111,77 @@ Gate gate_of(Score score, const sfd_assoc_t &a, double sigma2, double noise_px2)
     }
 }
 
-/// Inliers of F among the packed matches (Sampson distance of eq. (25) <= thr, px^2, compared
-/// without division: e^2 <= thr * den); flags into @p flag. Stops early, returning a count below
-/// @p need, once even all remaining matches could not reach @p need (the flags are then partial
-/// and unused: only a better hypothesis is kept).
-int32_t sampson_count(const double F[9], const double (*x1)[2], const double (*x2)[2], int32_t nv,
-                      double thr, uint8_t *flag, int32_t need) {
+/// Counts the inliers of one OPRF hypothesis among the packed valid matches: the Sampson distance
+/// of eq. (25) in px^2 is at most @p thr_px2. It is evaluated in normalized coordinates x~ = K^-1 x,
+/// where F = K^-T E K^-1 gives the same residual e = x~_prev^T E x~_curr and the pixel Sampson
+/// denominator |(F x_curr)_12|^2 + |(F^T x_prev)_12|^2 = (g0^2 + h0^2) / fx^2 + (g1^2 + h1^2) / fy^2
+/// with g = E x~_curr, h = E^T x~_prev; the test e^2 <= thr (...) needs no division and, E being
+/// scaled to unit largest entry, is well conditioned in single precision. Blocks of
+/// SFD_ASSOC_SCORE_BLOCK matches are scored together (vectorizable; the NaN padding is never an
+/// inlier). Stops early, returning a count below @p need, once even all remaining matches could not
+/// reach @p need: only a hypothesis with more inliers than the best so far matters. Single
+/// precision only ranks the hypotheses: the verdicts of the chosen one are computed in double
+/// precision with sampson_px2().
+int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], float thr_u, float thr_v, int32_t nv,
+                             int32_t need) {
+    constexpr int32_t kBlock = SFD_ASSOC_SCORE_BLOCK;
+    const float e0 = E[0], e1 = E[1], e2 = E[2], e3 = E[3], e4 = E[4], e5 = E[5], e6 = E[6],
+                e7 = E[7], e8 = E[8];
     int32_t count = 0;
-    for (int32_t k = 0; k < nv; ++k) {
-        if (count + (nv - k) < need) return count;
-        double e = 0.0;
-        double den = 0.0;
-        sampson_terms(F, x1[k], x2[k], &e, &den);
-        const uint8_t in = (den > 0.0 && e * e <= thr * den) ? 1U : 0U;
-        flag[k] = in;
-        count += in;
+    for (int32_t k0 = 0; k0 < nv; k0 += kBlock) {
+        if (count + (nv - k0) < need) return count;
+        const float *u1 = a->nx_prev_u + k0;
+        const float *v1 = a->nx_prev_v + k0;
+        const float *u2 = a->nx_curr_u + k0;
+        const float *v2 = a->nx_curr_v + k0;
+        int32_t block_count = 0;
+        for (int32_t j = 0; j < kBlock; ++j) {
+            const float g0 = e0 * u2[j] + e1 * v2[j] + e2;
+            const float g1 = e3 * u2[j] + e4 * v2[j] + e5;
+            const float g2 = e6 * u2[j] + e7 * v2[j] + e8;
+            const float h0 = e0 * u1[j] + e3 * v1[j] + e6;
+            const float h1 = e1 * u1[j] + e4 * v1[j] + e7;
+            const float e = u1[j] * g0 + v1[j] * g1 + g2;
+            const float rhs = thr_u * (g0 * g0 + h0 * h0) + thr_v * (g1 * g1 + h1 * h1);
+            const int32_t in = static_cast<int32_t>(e * e <= rhs) & static_cast<int32_t>(rhs > 0.0F);
+            block_count += in;
+        }
+        count += block_count;
     }
     return count;
 }
 
+/// The Sampson distance of eq. (25) of every packed valid match under @p E, in units of sigma^2
+/// (the same normalized-coordinate form and precision as sampson_count_packed()), into
+/// a.packed_stat; 3e38 where the denominator vanishes or the value is not finite.
+void sampson_stat_packed(sfd_assoc_t *a, const float E[9], float inv_fx2, float inv_fy2,
+                         float inv_sigma2, int32_t nv) {
+    constexpr int32_t kBlock = SFD_ASSOC_SCORE_BLOCK;
+    const float e0 = E[0], e1 = E[1], e2 = E[2], e3 = E[3], e4 = E[4], e5 = E[5], e6 = E[6],
+                e7 = E[7], e8 = E[8];
+    for (int32_t k0 = 0; k0 < nv; k0 += kBlock) {
+        const float *u1 = a->nx_prev_u + k0;
+        const float *v1 = a->nx_prev_v + k0;
+        const float *u2 = a->nx_curr_u + k0;
+        const float *v2 = a->nx_curr_v + k0;
+        float *stat = a->packed_stat + k0;
+        for (int32_t j = 0; j < kBlock; ++j) {
+            const float g0 = e0 * u2[j] + e1 * v2[j] + e2;
+            const float g1 = e3 * u2[j] + e4 * v2[j] + e5;
+            const float g2 = e6 * u2[j] + e7 * v2[j] + e8;
+            const float h0 = e0 * u1[j] + e3 * v1[j] + e6;
+            const float h1 = e1 * u1[j] + e4 * v1[j] + e7;
+            const float e = u1[j] * g0 + v1[j] * g1 + g2;
+            const float den = inv_fx2 * (g0 * g0 + h0 * h0) + inv_fy2 * (g1 * g1 + h1 * h1);
+            const float d = (e * e * inv_sigma2) / den;
+            stat[j] = (d <= 3.0e38F) ? d : 3.0e38F;  // den = 0 gives Inf or NaN: 3e38
+        }
+    }
+}
+
 /// Scores every valid match (restricted to @p only when given) under @p model into a.cur /
 /// a.cur_stat; returns the inlier count. (The hypothesis loop scores OPRF's Sampson distance with
-/// sampson_count() over packed arrays; this serves the stage-2 rescue and the other distances.)
+/// sampson_count_packed(); this serves the stage-2 rescue and the other distances.)
 int32_t score_all(sfd_assoc_t *a, Score score, const sfd_ekf_camera_t &cam, const Model &model,
                   const sfd_match_t *m, int32_t n, const uint8_t *only) {
     const double sigma2 = cam.pixel_sigma_px * cam.pixel_sigma_px;
@@ -227,15 +283,6 @@ int32_t gate_innovations(sfd_assoc_t *a, const sfd_ekf_t &ekf, const sfd_ekf_cam
     return removed;
 }
 
-void finish_counts(sfd_assoc_result_t *out) {
-    out->num_consistent = out->num_spurious = out->num_untested = 0;
-    for (int32_t i = 0; i < out->n; ++i) {
-        if (out->status[i] == SFD_VERDICT_CONSISTENT) ++out->num_consistent;
-        if (out->status[i] == SFD_VERDICT_SPURIOUS) ++out->num_spurious;
-        if (out->status[i] == SFD_VERDICT_UNTESTED) ++out->num_untested;
-    }
-}
-
 }  // namespace
 }  // namespace sfd
 
@@ -301,23 +348,34 @@ bool same_bits(const double *x, const double *y, int n) {
     return true;
 }
 
+/// Above this the depth is not finite (overflow of the camera transform).
+constexpr double kInfDepth_m = std::numeric_limits<double>::max();
+
+/// A match is 16 doubles and nothing else (checked finite in one pass).
+constexpr std::size_t kMatchDoubles = 16;
+static_assert(sizeof(sfd_match_t) == kMatchDoubles * sizeof(double),
+              "sfd_match_t must hold exactly its 16 doubles");
+
 bool same_prior(const sfd_assoc_t &a, const sfd_ekf_t &ekf) {
     return same_bits(a.prior_p_m, ekf.p_IinW_m, 3) && same_bits(a.prior_q, ekf.q_ItoW, 4);
 }
 
 void write_verdicts(const sfd_assoc_t &a, sfd_assoc_result_t *out) {
+    int32_t tested = 0;
+    int32_t consistent = 0;
     for (int32_t i = 0; i < a.n; ++i) {
-        if (a.valid[i] == 0U) {
-            out->status[i] = SFD_VERDICT_UNTESTED;
-            out->stage[i] = SFD_STAGE_NONE;
-            out->statistic[i] = 0.0F;
-            continue;
-        }
-        out->status[i] = (a.best[i] != 0U) ? SFD_VERDICT_CONSISTENT : SFD_VERDICT_SPURIOUS;
-        out->stage[i] = a.stage;
-        out->statistic[i] = a.best_stat[i];
+        const bool valid = (a.valid[i] != 0U);
+        const bool in = valid && (a.best[i] != 0U);
+        out->status[i] = static_cast<int8_t>(
+            valid ? (in ? SFD_VERDICT_CONSISTENT : SFD_VERDICT_SPURIOUS) : SFD_VERDICT_UNTESTED);
+        out->stage[i] = valid ? a.stage : static_cast<int8_t>(SFD_STAGE_NONE);
+        out->statistic[i] = valid ? a.best_stat[i] : 0.0F;
+        tested += valid ? 1 : 0;
+        consistent += in ? 1 : 0;
     }
-    finish_counts(out);
+    out->num_consistent = consistent;
+    out->num_spurious = tested - consistent;
+    out->num_untested = a.n - tested;
 }
 
 }  // namespace
@@ -353,23 +411,25 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
     const Linearizer lz(*ekf, R_prior, *cam);
     const double sigma2 = cam->pixel_sigma_px * cam->pixel_sigma_px;
     const bool need_spread = (prm.method == SFD_METHOD_RANSAC1);
+    const bool pack_pixels = (prm.method == SFD_METHOD_RANSACF);
+    const double inv_fx = 1.0 / cam->fx_px;
+    const double inv_fy = 1.0 / cam->fy_px;
+    const std::size_t nbytes = static_cast<std::size_t>(n);
+    std::memset(a.valid, 0, nbytes);
+    std::memset(a.cur, 0, nbytes);
+    std::memset(a.best, 0, nbytes);
+    std::memset(a.rescued, 0, nbytes);
+    std::memset(a.best_stat, 0, nbytes * sizeof(float));  // all-zero bits: 0.0F
+    std::memset(a.cur_stat, 0, nbytes * sizeof(float));
     int32_t nv = 0;
     double inv_depth_sum = 0.0;
     for (int32_t i = 0; i < n; ++i) {
         const sfd_match_t &mt = matches[i];
-        a.valid[i] = 0U;
-        a.cur[i] = a.best[i] = a.rescued[i] = 0U;
-        a.best_stat[i] = a.cur_stat[i] = 0.0F;
-        // All 16 inputs finite: x * 0 is 0 for a finite x and NaN otherwise (IEEE 754, no
-        // fast-math), so one test of the sum replaces 16.
-        double zero_if_finite = 0.0;
-        for (int k = 0; k < 2; ++k) {
-            zero_if_finite += mt.prev_uv_px[k] * 0.0 + mt.obs.uv_px[k] * 0.0;
-        }
-        for (int k = 0; k < 3; ++k) zero_if_finite += mt.obs.landmark_W_m[k] * 0.0;
-        for (int k = 0; k < 9; ++k) zero_if_finite += mt.obs.landmark_cov_m2[k] * 0.0;
-        double c[3];
-        if (!std::isfinite(zero_if_finite) || !lz.camera_point(mt.obs.landmark_W_m, c)) continue;
+        // All 16 inputs finite and the landmark in front of the prior camera. (A landmark whose
+        // other camera coordinates overflow fails later, in linearize(), and is never an update.)
+        if (!all_finite_repr<kMatchDoubles>(&mt)) continue;
+        const double depth_m = lz.depth_m(mt.obs.landmark_W_m);
+        if (!(depth_m > 1e-6 && depth_m < kInfDepth_m)) continue;
         if (need_spread) {
             Linearized lin;
             if (!lz.linearize(mt.obs, &lin)) continue;
@@ -378,12 +438,23 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
             a.noise_px2[i] = sigma2;
         }
         a.valid[i] = 1U;
-        a.x_prev[nv][0] = mt.prev_uv_px[0];  // packed for the scoring loops
-        a.x_prev[nv][1] = mt.prev_uv_px[1];
-        a.x_curr[nv][0] = mt.obs.uv_px[0];
-        a.x_curr[nv][1] = mt.obs.uv_px[1];
+        if (pack_pixels) {  // the fundamental-matrix RANSAC's inputs
+            a.x_prev[nv][0] = mt.prev_uv_px[0];
+            a.x_prev[nv][1] = mt.prev_uv_px[1];
+            a.x_curr[nv][0] = mt.obs.uv_px[0];
+            a.x_curr[nv][1] = mt.obs.uv_px[1];
+        } else {  // OPRF's scoring inputs (unused by the other methods)
+            a.nx_prev_u[nv] = static_cast<float>((mt.prev_uv_px[0] - cam->cx_px) * inv_fx);
+            a.nx_prev_v[nv] = static_cast<float>((mt.prev_uv_px[1] - cam->cy_px) * inv_fy);
+            a.nx_curr_u[nv] = static_cast<float>((mt.obs.uv_px[0] - cam->cx_px) * inv_fx);
+            a.nx_curr_v[nv] = static_cast<float>((mt.obs.uv_px[1] - cam->cy_px) * inv_fy);
+        }
         a.valid_idx[nv++] = i;
-        inv_depth_sum += 1.0 / c[2];
+        inv_depth_sum += 1.0 / depth_m;
+    }
+    for (int32_t k = nv; k < SFD_ASSOC_PACKED_CAP && (k % SFD_ASSOC_SCORE_BLOCK) != 0; ++k) {
+        const float nan = std::numeric_limits<float>::quiet_NaN();  // never an inlier
+        a.nx_prev_u[k] = a.nx_prev_v[k] = a.nx_curr_u[k] = a.nx_curr_v[k] = nan;
     }
     a.stage = SFD_STAGE_NONE;
     a.score_kind = static_cast<int32_t>(Score::kSampson);
@@ -442,6 +513,8 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
         // OPRF's Sampson scoring runs over packed pixel arrays of the valid matches.
         const bool packed = (score == Score::kSampson);
         const double thr_sampson = a.chi2_1 * sigma2;
+        const float thr_u = static_cast<float>(thr_sampson * inv_fx * inv_fx);
+        const float thr_v = static_cast<float>(thr_sampson * inv_fy * inv_fy);
         Model best_model{};
         int32_t best_count = -1;
         int32_t needed = prm.max_hypotheses;  // line 1: "a big value"
@@ -456,16 +529,15 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
                 !single_update_pose(*ekf, R_prior, Pss, lin, &R_h, &p_h)) {
                 continue;  // a failed hypothesis still counts against the budget
             }
-            const Model model = make_model(*cam, prev, R_h, p_h);
-            const int32_t count = packed ? sampson_count(model.F, a.x_prev, a.x_curr, nv,
-                                                         thr_sampson, a.cur, best_count + 1)
-                                         : score_all(&a, score, *cam, model, matches, n, nullptr);
+            const Model model =
+                make_model(*cam, prev, R_h, p_h, packed ? Parts::kEpipolarOnly : Parts::kAll);
+            const int32_t count =
+                packed ? sampson_count_packed(&a, model.E, thr_u, thr_v, nv, best_count + 1)
+                       : score_all(&a, score, *cam, model, matches, n, nullptr);
             if (count > best_count) {  // line 6
                 best_count = count;
                 best_model = model;
-                if (packed) {
-                    for (int32_t k = 0; k < nv; ++k) a.best[a.valid_idx[k]] = a.cur[k];
-                } else {
+                if (!packed) {
                     for (int32_t i = 0; i < n; ++i) {
                         a.best[i] = a.cur[i];
                         a.best_stat[i] = a.cur_stat[i];
@@ -476,12 +548,17 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
                     prm.max_hypotheses);
             }
         }
-        if (packed && best_count >= 0) {  // the statistics of the best hypothesis, once
-            const double inv_s2 = 1.0 / sigma2;
+        if (packed && best_count >= 0) {  // verdicts and statistics of the best hypothesis
+            sampson_stat_packed(&a, best_model.E, static_cast<float>(inv_fx * inv_fx),
+                                static_cast<float>(inv_fy * inv_fy),
+                                static_cast<float>(1.0 / sigma2), nv);
+            const float chi2_1 = static_cast<float>(a.chi2_1);
+            best_count = 0;
             for (int32_t k = 0; k < nv; ++k) {
-                const double d = sampson_px2(best_model.F, a.x_prev[k], a.x_curr[k]);
-                const double st = d * inv_s2;
-                a.best_stat[a.valid_idx[k]] = static_cast<float>((st < 3.0e38) ? st : 3.0e38);
+                const int32_t i = a.valid_idx[k];
+                a.best[i] = (a.packed_stat[k] <= chi2_1) ? 1U : 0U;
+                best_count += a.best[i];
+                a.best_stat[i] = a.packed_stat[k];
             }
         }
         out->hypotheses_used = h;
@@ -550,7 +627,7 @@ extern "C" sfd_status_t sfd_assoc_apply(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
         CameraPose prev;
         prev.R_WtoC = Eigen::Map<const Mat3>(a.prev_R_CtoW).transpose();
         prev.p_CinW = Vec3(a.prev_p_CinW_m[0], a.prev_p_CinW_m[1], a.prev_p_CinW_m[2]);
-        const Model model = make_model(*cam, prev, R_post, p_post);
+        const Model model = make_model(*cam, prev, R_post, p_post, Parts::kAll);
         for (int32_t i = 0; i < n; ++i) a.rescued[i] = (a.best[i] == 0U) ? a.valid[i] : 0U;
         int32_t count2 = score_all(&a, score, *cam, model, matches, n, a.rescued);
         for (int32_t i = 0; i < n; ++i) {

@@ -52,6 +52,11 @@ struct Linearizer {
     Linearizer(const sfd_ekf_t &ekf, const Mat3 &R_ItoW, const sfd_ekf_camera_t &cam);
     /// Landmark in the camera frame; false when not finite or not in front (z <= 1e-6 m).
     bool camera_point(const double L_W[3], double c[3]) const;
+    /// Depth (m) of a landmark in the camera frame, the third row of camera_point() alone (the
+    /// caller tests it: in front means depth > 1e-6 m and finite).
+    double depth_m(const double L_W[3]) const {
+        return RWC[6] * (L_W[0] - pC[0]) + RWC[7] * (L_W[1] - pC[1]) + RWC[8] * (L_W[2] - pC[2]);
+    }
     /// Full linearization of @p obs; false as camera_point() or when a value is not finite.
     bool linearize(const sfd_ekf_obs_t &obs, Linearized *out) const;
 };

@@ -29,6 +29,13 @@ typedef struct {
     sfd_ekf_obs_t obs;    /**< current undistorted pixel + landmark (world) with covariance */
 } sfd_match_t;
 
+/** Block width of OPRF's hypothesis scoring (floats scored together); the packed arrays below
+ *  are padded to a multiple of it. */
+#define SFD_ASSOC_SCORE_BLOCK 8
+/** Capacity of the packed scoring arrays: SFD_MAX_FEATURES rounded up to the block width. */
+#define SFD_ASSOC_PACKED_CAP \
+    (((SFD_MAX_FEATURES + SFD_ASSOC_SCORE_BLOCK - 1) / SFD_ASSOC_SCORE_BLOCK) * SFD_ASSOC_SCORE_BLOCK)
+
 /** Parameters of the association methods. */
 typedef struct {
     int32_t method;          /**< SFD_METHOD_NONE, _OPRF, _RANSAC1 or _RANSACF */
@@ -57,6 +64,13 @@ typedef struct {
     double noise_px2[SFD_MAX_FEATURES]; /**< per match: sigma^2 + landmark spread (px^2) */
     double x_prev[SFD_MAX_FEATURES][2]; /**< compacted inputs of the fundamental-matrix RANSAC */
     double x_curr[SFD_MAX_FEATURES][2];
+    /* OPRF's hypothesis scoring: the valid matches in normalized image coordinates (K^-1 x),
+     * single precision, structure of arrays, padded with NaN to a whole block */
+    float nx_prev_u[SFD_ASSOC_PACKED_CAP];
+    float nx_prev_v[SFD_ASSOC_PACKED_CAP];
+    float nx_curr_u[SFD_ASSOC_PACKED_CAP];
+    float nx_curr_v[SFD_ASSOC_PACKED_CAP];
+    float packed_stat[SFD_ASSOC_PACKED_CAP]; /**< statistic of each packed match (sigma^2 units) */
     /* between sfd_assoc_select() and sfd_assoc_apply() */
     int32_t selected;      /**< 1 after select, 0 after apply */
     int32_t n;             /**< matches of the selected frame */
