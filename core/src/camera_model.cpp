@@ -199,10 +199,17 @@ Mat2 inverse2(const Mat2 &J) {
     return inv;
 }
 
+/// A Newton step at the rounding level of double precision at @p x: |step| <= 4 eps max(1, |x|).
+bool converged_step(double step, double x) {
+    return std::fabs(step) <= 4.0 * std::numeric_limits<double>::epsilon() * std::fmax(1.0, std::fabs(x));
+}
+
 /// Pinhole / radtan inversion: Newton's method on F(xn) = d(xn) - d_target,
 ///   xn <- xn - (dd/dxn)^-1 F(xn),
-/// from xn = d_target, for exactly SFD_UNDISTORT_ITERATIONS steps (constant run time). Newton
-/// converges quadratically once close; the caller verifies the result by its pixel residual.
+/// from xn = d_target, for at most SFD_UNDISTORT_ITERATIONS steps; it stops once a step is at the
+/// rounding level of double precision (converged_step()), where further steps only move xn by
+/// rounding. Newton converges quadratically once close (typically 3-5 steps inside the image);
+/// the caller verifies the result by its pixel residual.
 /// Every iterate must be on the orientation-preserving side of the model (det > 0): an iterate
 /// with det <= 0 has crossed a fold, and whatever root Newton finds from there is not the
 /// physical one. For barrel distortion (|d| < |xn|) the start d_target lies between the centre
@@ -214,7 +221,9 @@ bool invert_newton_2d(const sfd_camera_t &cam, const Vec2 &d_target, Vec2 *xn) {
     for (int it = 0; it < SFD_UNDISTORT_ITERATIONS; ++it) {
         const Distorted f = distort_model(cam, x);
         if (!finite2(f.d) || !invertible(f.J)) return false;
-        x -= inverse2(f.J) * (f.d - d_target);
+        const Vec2 step = inverse2(f.J) * (f.d - d_target);
+        x -= step;
+        if (converged_step(step(0), x(0)) && converged_step(step(1), x(1))) break;
     }
     *xn = x;
     return finite2(x);
@@ -222,8 +231,8 @@ bool invert_newton_2d(const sfd_camera_t &cam, const Vec2 &d_target, Vec2 *xn) {
 
 /// Equidistant inversion: the model is radially symmetric, so only the radius is unknown.
 /// theta_d = |d_target|; solve theta_d(theta) = theta_d by scalar Newton from theta = theta_d
-/// for exactly SFD_UNDISTORT_ITERATIONS steps (cv::fisheye::undistortPoints does the same with
-/// a tolerance exit), then
+/// for at most SFD_UNDISTORT_ITERATIONS steps, stopping at the rounding level as above
+/// (cv::fisheye::undistortPoints has a looser tolerance exit), then
 /// xn = (tan(theta) / theta_d) d_target. theta must end in [0, pi/2): a ray at or beyond 90 deg
 /// has no normalized coordinates (x/z, y/z).
 bool invert_equidistant(const double k[4], const Vec2 &d_target, Vec2 *xn) {
@@ -236,7 +245,9 @@ bool invert_equidistant(const double k[4], const Vec2 &d_target, Vec2 *xn) {
     for (int it = 0; it < SFD_UNDISTORT_ITERATIONS; ++it) {
         const double slope = equidistant_dtheta_d(k, theta);
         if (!std::isfinite(slope) || !(std::fabs(slope) > kMinDistortionDet)) return false;
-        theta -= (equidistant_theta_d(k, theta) - theta_d) / slope;
+        const double step = (equidistant_theta_d(k, theta) - theta_d) / slope;
+        theta -= step;
+        if (converged_step(step, theta)) break;
     }
     if (!std::isfinite(theta) || !(theta >= 0.0) || !(theta < kHalfPi)) return false;
     *xn = (std::tan(theta) / theta_d) * d_target;

@@ -17,6 +17,10 @@ constexpr double kRotTol = 1e-6;
 constexpr double kMinDepth = 1e-6;  // m, as the EKF's "in front of the camera"
 /// Most Gauss-Newton steps of one refinement (iterated EKF); 1 = the EKF step, relinearized.
 constexpr int kRefineIterations = SFD_LANDMARK_REFINE_ITERATIONS;
+/// The iterated update stops once a step is below 1e-6 of the prior's standard deviation in
+/// every direction (squared Mahalanobis length 1e-12): what is left moves the landmark by far less
+/// than its uncertainty, and the iterations that remain cost as much as the first.
+constexpr double kConvergedStep2 = 1e-12;
 /// Step halvings tried per Gauss-Newton step (smallest step 2^-(kHalvings-1) of the full one).
 constexpr int kHalvings = 12;
 
@@ -182,6 +186,14 @@ bool innovation(const Mat3 &P, const Linear &lin, Mat32 *PHt, Mat2 *Sinv, Mat2 *
 /// J(x) = (x - x0)^T P^-1 (x - x0) + (z - h(x))^T R_n^-1 (z - h(x)), with P = L L^T; the
 /// measurement part at the linearization @p lin of x (its h and R_n). Infinite when R_n is not
 /// positive definite.
+/// Squared length of @p v in the metric of the prior covariance P = L L^T: |L^-1 v|^2.
+double prior_mahalanobis2(const double (*L)[3], const Vec3 &v) {
+    const double d[3] = {v(0), v(1), v(2)};
+    double w[3] = {0.0, 0.0, 0.0};
+    la::forward_solve<3>(L, 3, d, w);
+    return w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+}
+
 double map_cost(const double (*L)[3], const Vec3 &x0, const Vec3 &x, const Vec2 &z,
                 const Linear &lin) {
     const double d[3] = {x(0) - x0(0), x(1) - x0(1), x(2) - x0(2)};
@@ -372,6 +384,7 @@ extern "C" sfd_status_t sfd_landmark_refine(sfd_landmark_map_t *map, int32_t ind
         const Vec3 target = p0 + K * (z - at.h - at.H * (p0 - x));
         const Vec3 step = target - x;
         if (!all_finite(step.data(), 3) || step.norm() <= 1e-12 * (x - pC).norm()) break;
+        if (have_cost && prior_mahalanobis2(L, step) <= kConvergedStep2) break;
         const double J0 = have_cost ? map_cost(L, p0, x, z, at) : 0.0;
         double lambda = 1.0;
         bool accepted = false;

@@ -65,8 +65,9 @@ sfd_status_t sfd_camera_distort(const sfd_camera_t *cam, const double xn[2], dou
                                 double J_uv_xn[4]);
 
 /**
- * @brief Inverse of sfd_camera_distort: raw pixels to normalized undistorted coordinates by a fixed
- *        number (SFD_UNDISTORT_ITERATIONS) of Newton steps on the distortion model.
+ * @brief Inverse of sfd_camera_distort: raw pixels to normalized undistorted coordinates by at most
+ *        SFD_UNDISTORT_ITERATIONS Newton steps on the distortion model (fewer once converged to
+ *        double precision).
  * @param J_xn_uv Out (nullable): 2x2 Jacobian d(xn)/d(uv) at the solution (inverse of the forward
  *        Jacobian), used to carry pixel noise into normalized coordinates.
  * @return SFD_OK; SFD_ERR_INVAL for null/non-finite input; SFD_ERR_NUMERIC when the distortion

@@ -56,7 +56,8 @@
 #define SFD_LANDMARK_REFINE_ITERATIONS 5
 #endif
 
-/** Newton iterations used to invert a lens distortion model (fixed, not a tolerance loop). */
+/** Newton iterations at most to invert a lens distortion model (the loop stops earlier once a
+ *  step is at the rounding level of double precision). */
 #ifndef SFD_UNDISTORT_ITERATIONS
 #define SFD_UNDISTORT_ITERATIONS 12
 #endif
