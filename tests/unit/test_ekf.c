@@ -240,6 +240,67 @@ static void random_filter(sfd_ekf_t *ekf, sfd_prng_t *rng) {
     for (int i = 0; i < NX * NX; ++i) ekf->P[i] = GGt[i] + ((i % (NX + 1)) == 0 ? 0.01 : 0.0);
 }
 
+/* GIVEN a filter with a dense random covariance, a rotating, accelerating IMU sample and biases
+ * WHEN propagated one step THEN P' equals the dense F P F^T + Q of eqs. (17)-(18), with F built
+ * here entry by entry (the core multiplies over F's nonzero blocks only) */
+static void ekf_propagated_covariance_equals_dense_transition(void **state) {
+    (void)state;
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 77);
+    sfd_ekf_t ekf;
+    random_filter(&ekf, &rng);
+    const double gyro[3] = {0.3, -0.5, 0.8}, accel[3] = {1.5, -0.7, 9.3}, dt = 0.005;
+    double P0[NX * NX], R[9];
+    memcpy(P0, ekf.P, sizeof P0);
+    rotmat_of(&ekf, R);
+    double w[3], a[3], mdtw[3];
+    for (int k = 0; k < 3; ++k) {
+        w[k] = gyro[k] - ekf.bg_rad_s[k];
+        a[k] = accel[k] - ekf.ba_m_s2[k];
+        mdtw[k] = -dt * w[k];
+    }
+    const double ax[9] = {0, -a[2], a[1], a[2], 0, -a[0], -a[1], a[0], 0};
+    double Rax[9], Rw[9];
+    matmul(3, 3, 3, R, ax, Rax);
+    assert_status(sfd_so3_exp(mdtw, Rw), SFD_OK);
+    enum { P_ = SFD_EKF_IDX_P, V_ = SFD_EKF_IDX_V, T_ = SFD_EKF_IDX_THETA, G_ = SFD_EKF_IDX_BG,
+           A_ = SFD_EKF_IDX_BA };
+    double F[NX * NX];
+    memset(F, 0, sizeof F);
+    for (int i = 0; i < NX; ++i) F[i * NX + i] = 1.0;
+    for (int r = 0; r < 3; ++r) {
+        F[(P_ + r) * NX + V_ + r] = dt;
+        F[(T_ + r) * NX + G_ + r] = -dt;
+        for (int c = 0; c < 3; ++c) {
+            F[(P_ + r) * NX + T_ + c] = -0.5 * dt * dt * Rax[3 * r + c];
+            F[(P_ + r) * NX + A_ + c] = -0.5 * dt * dt * R[3 * r + c];
+            F[(V_ + r) * NX + T_ + c] = -dt * Rax[3 * r + c];
+            F[(V_ + r) * NX + A_ + c] = -dt * R[3 * r + c];
+            F[(T_ + r) * NX + T_ + c] = Rw[3 * r + c];
+        }
+    }
+    double FP[NX * NX], Ft[NX * NX], Pd[NX * NX];
+    matmul(NX, NX, NX, F, P0, FP);
+    transpose(NX, NX, F, Ft);
+    matmul(NX, NX, NX, FP, Ft, Pd);
+    const sfd_ekf_noise_t *nz = &ekf.noise;
+    const double qa = nz->accel_noise_m_s2_rthz * nz->accel_noise_m_s2_rthz;
+    for (int k = 0; k < 3; ++k) {
+        Pd[(P_ + k) * NX + P_ + k] += qa * dt * dt * dt / 3.0;
+        Pd[(P_ + k) * NX + V_ + k] += qa * dt * dt / 2.0;
+        Pd[(V_ + k) * NX + P_ + k] += qa * dt * dt / 2.0;
+        Pd[(V_ + k) * NX + V_ + k] += qa * dt;
+        Pd[(T_ + k) * NX + T_ + k] +=
+            nz->gyro_noise_rad_s_rthz * nz->gyro_noise_rad_s_rthz * dt;
+        Pd[(G_ + k) * NX + G_ + k] +=
+            nz->gyro_bias_rw_rad_s2_rthz * nz->gyro_bias_rw_rad_s2_rthz * dt;
+        Pd[(A_ + k) * NX + A_ + k] +=
+            nz->accel_bias_rw_m_s3_rthz * nz->accel_bias_rw_m_s3_rthz * dt;
+    }
+    assert_status(sfd_ekf_propagate(&ekf, gyro, accel, dt), SFD_OK);
+    for (int i = 0; i < NX * NX; ++i) assert_near(ekf.P[i], Pd[i], 1e-12);
+}
+
 static sfd_ekf_obs_t observation_ahead(const sfd_ekf_t *ekf, const sfd_ekf_camera_t *cam,
                                        sfd_prng_t *rng, double depth) {
     double R_CtoW[9], p_C[3];
@@ -652,6 +713,7 @@ static void ekf_rejects_bad_input_and_stays_unchanged(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(ekf_linear_case_equals_kalman_filter),
+        cmocka_unit_test(ekf_propagated_covariance_equals_dense_transition),
         cmocka_unit_test(ekf_camera_update_equals_textbook_equations),
         cmocka_unit_test(ekf_camera_jacobian_matches_numerical_derivative),
         cmocka_unit_test(ekf_consider_states_are_not_corrected_and_p_stays_exact),
