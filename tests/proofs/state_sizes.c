@@ -10,11 +10,12 @@
 #define SFD_STATE_BUDGET_BYTES 262144
 #endif
 
-/* One detector's worth of state: everything a caller instantiates per camera. Grows as the
- * detectors land (parity window, EKF, OPRF scratch). */
+/* One detector's worth of state: everything a caller instantiates per camera to run the
+ * combined pipeline (parity window, EKF, association workspace and result, landmark map). */
 #define SFD_STATE_TOTAL                                                     \
     (sizeof(sfd_parity_t) + sizeof(sfd_extrinsics_t) + sizeof(sfd_prng_t) + \
-     sizeof(sfd_landmark_map_t))
+     sizeof(sfd_landmark_map_t) + sizeof(sfd_ekf_t) + sizeof(sfd_assoc_t) +  \
+     sizeof(sfd_assoc_result_t))
 
 _Static_assert(SFD_MAX_FEATURES != 256 || SFD_MAX_WINDOW != 5 ||
                    SFD_STATE_TOTAL <= SFD_STATE_BUDGET_BYTES,
@@ -37,6 +38,10 @@ int main(void) {
            sizeof(sfd_parity_t), SFD_MAX_WINDOW, SFD_MAX_FEATURES);
     printf("%-22s %8zu B (%d landmarks)\n", "sfd_landmark_map_t", sizeof(sfd_landmark_map_t),
            SFD_MAX_LANDMARKS);
+    printf("%-22s %8zu B (15-state error-state EKF)\n", "sfd_ekf_t", sizeof(sfd_ekf_t));
+    printf("%-22s %8zu B (association workspace)\n", "sfd_assoc_t", sizeof(sfd_assoc_t));
+    printf("%-22s %8zu B (association verdicts)\n", "sfd_assoc_result_t",
+           sizeof(sfd_assoc_result_t));
     printf("%-22s %8zu B (caller's input frame)\n", "sfd_frame_t", sizeof(sfd_frame_t));
     printf("%-22s %8zu B (caller's output)\n", "sfd_verdict_t", sizeof(sfd_verdict_t));
     const size_t total = SFD_STATE_TOTAL;
