@@ -7,7 +7,8 @@
 #    CSV inside [first frame - 1 s, last frame + 50 ms], FEATURES within the bound, ids unique in a
 #    frame and never reused after a track is lost;
 #  - CAMERA_INFO equals cam0_sensor.yaml (intrinsics, distortion, T_BS), read here independently;
-#  - the conversion is byte-identical when repeated;
+#  - the conversion is byte-identical when repeated, and the same through --euroc (standard
+#    layout, made of symbolic links to the same files);
 #  - every method processes the 10 frames, judges features, and the summary says "not scored"
 #    (null scores) instead of scoring against labels real data does not have.
 # Skips (CTest SKIP_RETURN_CODE 77) with a message when the shared data is absent.
@@ -27,6 +28,17 @@ common=(--images "$data/frontend/cam0" --frames "$data/derived/frames.csv"
 "$build/apps/sfd-euroc" "${common[@]}" -o "$tmp/fb2.lcmlog" >/dev/null
 cmp "$tmp/fb.lcmlog" "$tmp/fb2.lcmlog"
 "$build/apps/sfd-euroc" "${common[@]}" --no-fb-check -o "$tmp/nofb.lcmlog"
+# The standard EuRoC layout (--euroc), built from the same files with symbolic links, gives the
+# same log byte for byte.
+mav="$tmp/seq/mav0"
+mkdir -p "$mav/cam0/data" "$mav/imu0" "$mav/state_groundtruth_estimate0"
+for f in "$data"/frontend/cam0/*.jpg; do ln -s "$f" "$mav/cam0/data/"; done
+ln -s "$data/derived/frames.csv" "$mav/cam0/data.csv"
+ln -s "$data/derived/calib/cam0_sensor.yaml" "$mav/cam0/sensor.yaml"
+ln -s "$data/derived/imu0/data.csv" "$mav/imu0/data.csv"
+ln -s "$data/derived/groundtruth/V1_01_easy.csv" "$mav/state_groundtruth_estimate0/data.csv"
+"$build/apps/sfd-euroc" --euroc "$tmp/seq" -o "$tmp/layout.lcmlog" >/dev/null
+cmp "$tmp/fb.lcmlog" "$tmp/layout.lcmlog"
 # Bad input gives a clear error naming the file and the line (exit 2), not a crash.
 printf '#t\n1,2,3\n' > "$tmp/bad.csv"
 if "$build/apps/sfd-euroc" "${common[@]}" --imu "$tmp/bad.csv" -o "$tmp/x.lcmlog" 2> "$tmp/err.txt"; then
