@@ -551,7 +551,15 @@ int main(int argc, char **argv) {
     static sfd_truth_t tr;
     long features_total = 0, truth_written = 0, lost_fb = 0, lost_lk = 0;
     for (const Frame &f : frames) {
-        const cv::Mat img = cv::imread(f.path, cv::IMREAD_GRAYSCALE);
+        // OpenCV reports some failures (corrupt files, internal checks) by exception: turned
+        // into an error message naming the image, never a crash.
+        cv::Mat img;
+        try {
+            img = cv::imread(f.path, cv::IMREAD_GRAYSCALE);
+        } catch (const cv::Exception &e) {
+            std::fprintf(stderr, "%s: %s: %s\n", kProg, f.path.c_str(), e.what());
+            return 2;
+        }
         if (img.empty()) {
             std::fprintf(stderr, "%s: %s: cannot read the image\n", kProg, f.path.c_str());
             return 2;
@@ -562,8 +570,14 @@ int main(int argc, char **argv) {
                          calib.height);
             return 2;
         }
-        if (!tracker.track(img, &err)) {
-            std::fprintf(stderr, "%s: %s: %s\n", kProg, f.path.c_str(), err.c_str());
+        bool tracked = false;
+        try {
+            tracked = tracker.track(img, &err);
+        } catch (const cv::Exception &e) {
+            err = std::string("OpenCV: ") + e.what();
+        }
+        if (!tracked) {
+            std::fprintf(stderr, "%s: %s: tracker: %s\n", kProg, f.path.c_str(), err.c_str());
             return 2;
         }
         std::memset(&ff, 0, sizeof ff);
