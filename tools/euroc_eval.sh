@@ -40,4 +40,4 @@ done
 PYTHONPATH="$build/lcm_types/python" "$py" "$root/tools/euroc_overlay.py" \
   --images "$data/frontend/cam0" --out-dir "$out/overlay" --every-frame \
   --gt "$data/derived/groundtruth/V1_01_easy.csv" --calib "$data/derived/calib/cam0_sensor.yaml" \
-  "${runs[@]}"
+  --crops 99,178,165,34,57,61,65,110,124 --crops-run fb/oprf "${runs[@]}"

@@ -27,6 +27,9 @@ coordinates times fx); a correct track has a small one (ground-truth and calibra
 only), a mistrack across its epipolar line a large one (a mistrack along the line is invisible).
 It goes into flagged_tracks.csv (epi_px), epipolar.md (distribution for flagged and not flagged
 features per run) and the PNGs (a yellow square around a track with epi_px > --epi-px).
+With --crops ID,ID,... --crops-run RUN: crops_<RUN>.png, one row per track id, one 61 x 61 px
+crop per frame centred on the track (a cross coloured by verdict), to judge by eye whether a
+track stays on its point.
 Deterministic: same logs and images give the same CSV/markdown (PNG bytes depend on matplotlib).
 """
 import argparse
@@ -145,6 +148,33 @@ def epipolar_px(pose_a, pose_b, xa, xb, fx):
     return fx * np.sqrt(num / den)
 
 
+def draw_crops(images, frames, verdicts, ids, png, half=30):
+    utimes = sorted(frames)
+    fig, axs = plt.subplots(len(ids), len(utimes), figsize=(1.2 * len(utimes), 1.3 * len(ids)),
+                            squeeze=False)
+    colours = {0: "#b0b0b0", 1: "#20d020", 2: "#ff2020"}
+    for r, tid in enumerate(ids):
+        for k, ut in enumerate(utimes):
+            ax = axs[r, k]
+            ax.axis("off")
+            if tid not in frames[ut] or ut not in images:
+                continue
+            img = plt.imread(images[ut])
+            img = img[..., 0] if img.ndim == 3 else img
+            u, v = frames[ut][tid]
+            ui, vi = int(round(u)), int(round(v))
+            pad = np.pad(img, half)
+            ax.imshow(pad[vi:vi + 2 * half + 1, ui:ui + 2 * half + 1], cmap="gray", vmin=0,
+                      vmax=255 if img.dtype == np.uint8 else 1.0,
+                      extent=(ui - half - 0.5, ui + half + 0.5, vi + half + 0.5, vi - half - 0.5))
+            status = dict((t, s) for t, s, _, _ in verdicts.get(ut, [])).get(tid, 0)
+            ax.plot(u, v, "+", color=colours[status], ms=10, mew=1.5)
+            ax.set_title(f"{tid} f{k}", fontsize=7)
+    fig.tight_layout()
+    fig.savefig(png, dpi=80)
+    plt.close(fig)
+
+
 def image_index(folder):
     out = {}
     for name in sorted(os.listdir(folder)):
@@ -195,6 +225,8 @@ def main():
     ap.add_argument("--calib", help="EuRoC camera sensor.yaml (with --gt)")
     ap.add_argument("--epi-px", type=float, default=2.0,
                     help="epipolar distance marked in the PNGs (px, default 2)")
+    ap.add_argument("--crops", help="track ids (comma-separated) for crops_<RUN>.png")
+    ap.add_argument("--crops-run", help="the RUN whose verdicts colour the crops")
     ap.add_argument("runs", nargs="+", help="RUN=OUT.lcmlog (sfd-replay -o)")
     a = ap.parse_args()
     if bool(a.gt) != bool(a.calib):
@@ -216,6 +248,10 @@ def main():
         frames, verdicts = read_run(path)
         if not verdicts:
             sys.exit(f"euroc_overlay: {path}: no SFD_VERDICT (is it an sfd-replay -o log?)")
+        if a.crops and run == a.crops_run:
+            ids = [int(x) for x in a.crops.split(",") if x.strip()]
+            draw_crops(images, frames, verdicts, ids,
+                       os.path.join(a.out_dir, f"crops_{run.replace('/', '_')}.png"))
         run_dir = os.path.join(a.out_dir, run.replace("/", "_"))
         os.makedirs(run_dir, exist_ok=True)
         utimes = sorted(frames)
