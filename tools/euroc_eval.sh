@@ -26,7 +26,7 @@ common=(--images "$data/frontend/cam0" --frames "$data/derived/frames.csv"
 bias="$(sed -n 's/.*gyro bias at the first frame: \(\[.*\]\) rad\/s/\1/p' "$out/convert_fb.txt")"
 printf '%%YAML:1.0\n---\ngyro_bias_rad_s: %s\nfilter:\n   init_from_truth: 1\n' "$bias" > "$out/cfg.yaml"
 # fb, nofb: the node's defaults (depth prior 10 m for features without one); fb-d3: the depth
-# prior set to 3 m, the scale of the room (V1 is a 8 x 8 m room; the floor is 1-4 m away).
+# prior set to 3 m, a guess at the scale of the indoor room (not measured).
 runs=()
 for run in fb nofb fb-d3; do
   log="${run%-d3}"; extra=()
