@@ -246,18 +246,31 @@ int main(int argc, char **argv) {
         return 1;
     }
 
-    // Score verdicts against TRUTH (tested features only; untested counted apart).
+    // Verdict counts without TRUTH (tested = CONSISTENT or SPURIOUS), for logs without labels.
+    long judged_tested = 0, judged_spurious = 0;
+    for (const auto &kv : g_app.verdicts) {
+        for (const int8_t st : kv.second.status) {
+            judged_tested += st != SFD_FEATURE_VERDICT_T_UNTESTED;
+            judged_spurious += st == SFD_FEATURE_VERDICT_T_SPURIOUS;
+        }
+    }
+    // Score verdicts against TRUTH (tested features only; untested counted apart). Only features
+    // TRUTH labels count; a frame is scored when TRUTH labels at least one of its features. TRUTH
+    // of real data (sfd-euroc) carries poses and no labels: nothing is scored, and the summary
+    // says so instead of printing zero scores.
     long tp = 0, fp = 0, tn = 0, fn = 0, untested_spurious = 0, untested_consistent = 0, scored = 0;
+    long labelled = 0;
     for (const auto &kv : g_app.verdicts) {
         const auto it = truth.find(kv.first);
         if (it == truth.end()) continue;
-        ++scored;
+        const long labelled_before = labelled;
         std::map<int64_t, int8_t> lab;
         for (size_t i = 0; i < it->second.ids.size(); ++i)
             lab[it->second.ids[i]] = it->second.status[i];
         for (size_t i = 0; i < kv.second.ids.size(); ++i) {
             const auto l = lab.find(kv.second.ids[i]);
             if (l == lab.end()) continue;
+            ++labelled;
             const bool sp = l->second != 0;
             const int8_t st = kv.second.status[i];
             if (st == SFD_FEATURE_VERDICT_T_UNTESTED) {
@@ -268,6 +281,7 @@ int main(int argc, char **argv) {
                 (sp ? fn : tn)++;
             }
         }
+        scored += labelled > labelled_before;
     }
     // Position RMSE of SFD_STATE against TRUTH at the same frame times (no alignment: the filter
     // starts from TRUTH (filter.init_from_truth) or at rest at the origin of its own frame, in
@@ -295,6 +309,13 @@ int main(int argc, char **argv) {
         in_path, method_name.c_str(), static_cast<long long>(events),
         static_cast<long long>(c.frames_processed), static_cast<long long>(c.frames_untested),
         scored);
+    std::printf("  judged: %ld features tested, %ld spurious (%.2f%%)\n", judged_tested,
+                judged_spurious,
+                judged_tested ? 100.0 * double(judged_spurious) / double(judged_tested) : 0.0);
+    if (scored == 0 && !truth.empty()) {
+        std::printf(
+            "  TRUTH has no spurious labels for the judged features: verdicts not scored\n");
+    }
     if (scored > 0) {
         std::printf(
             "  precision %.4f  recall %.4f  F1 %.4f  false-alarm rate %.5f  "
@@ -333,12 +354,23 @@ int main(int argc, char **argv) {
                          static_cast<long long>(c.rejected[k]));
         }
         std::fprintf(f,
-                     "},\n  \"methods\": {\n    \"%s\": {\"frames_scored\": %ld, \"tp\": %ld, "
+                     "},\n  \"methods\": {\n    \"%s\": {\"judged_tested\": %ld, "
+                     "\"judged_spurious\": %ld, \"labelled_features\": %ld, "
+                     "\"frames_scored\": %ld, \"tp\": %ld, "
                      "\"fp\": %ld, \"tn\": %ld, \"fn\": %ld, \"untested_spurious\": %ld, "
-                     "\"untested_consistent\": %ld, \"precision\": %.6f, \"recall\": %.6f, "
-                     "\"f1\": %.6f, \"false_alarm_rate\": %.6f",
-                     method_name.c_str(), scored, tp, fp, tn, fn, untested_spurious,
-                     untested_consistent, precision, recall, f1, far);
+                     "\"untested_consistent\": %ld",
+                     method_name.c_str(), judged_tested, judged_spurious, labelled, scored, tp, fp,
+                     tn, fn, untested_spurious, untested_consistent);
+        if (labelled > 0) {
+            std::fprintf(f,
+                         ", \"precision\": %.6f, \"recall\": %.6f, \"f1\": %.6f, "
+                         "\"false_alarm_rate\": %.6f",
+                         precision, recall, f1, far);
+        } else {  // no labels: no scores (null, not 0)
+            std::fprintf(f,
+                         ", \"precision\": null, \"recall\": null, \"f1\": null, "
+                         "\"false_alarm_rate\": null");
+        }
         if (state_frames > 0) {
             std::fprintf(f, ", \"state_frames\": %ld, \"position_rmse_m\": %.6f", state_frames,
                          rmse);

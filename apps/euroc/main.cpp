@@ -1,0 +1,666 @@
+// SPDX-License-Identifier: MIT
+// sfd-euroc: converts an EuRoC/ASL recording (Burri et al., IJRR 2016) into an sfd LCM log:
+// IMU, CAMERA_INFO (intrinsics, distortion, T_BS as T_imu_cam), FEATURES from the OpenCV tracker
+// (drivers/opencv) and, when ground truth is given, TRUTH poses at the frame times.
+//
+// EuRoC conventions used (dataset paper, Section 2, and the sensor.yaml files):
+//  - timestamps in ns; written as microseconds (ns / 1000, truncated);
+//  - imu0/data.csv: t, w_RS_S (rad/s, 3), a_RS_S (m/s^2, 3), IMU (body) frame = sfd's IMU frame;
+//  - state_groundtruth_estimate0/data.csv: t, p_RS_R (m, 3), q_RS (w, x, y, z) = IMU (body)
+//    orientation in the world (R), then velocity and biases (ignored). TRUTH carries p and q as
+//    they are (truth_t: IMU position/orientation in the world frame; EuRoC's world is z up);
+//  - cam0/sensor.yaml: T_BS = camera pose in the body (IMU) frame = CAMERA_INFO's T_imu_cam;
+//    intrinsics fu fv cu cv; radial-tangential k1 k2 p1 p2 (or equidistant k1..k4).
+// Real data carries no spurious labels: TRUTH's num_features is 0 (sfd-replay then says the
+// verdicts are not scored instead of scoring them against invented labels).
+#include <lcm/eventlog.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <dirent.h>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/stat.h>
+#include <vector>
+
+#include "sfd/sfd.h"
+#include "sfd_camera_info_t.h"
+#include "sfd_feature_frame_t.h"
+#include "sfd_feature_tracker.hpp"
+#include "sfd_imu_t.h"
+#include "sfd_truth_t.h"
+
+namespace {
+
+const char *kProg = "sfd-euroc";
+
+void usage(FILE *f) {
+    std::fprintf(
+        f,
+        "usage: sfd-euroc (--euroc DIR | --images DIR --imu CSV --calib YAML) -o OUT.lcmlog\n"
+        "                 [--frames CSV] [--gt CSV] [--cam camN] [--max-frames N]\n"
+        "                 [--imu-before-s S] [--camera-id ID]\n"
+        "                 [--max-features N] [--min-distance-px PX] [--no-fb-check]\n"
+        "                 [--fb-threshold-px PX] [--quality-level Q] [--lk-window-px W]\n"
+        "                 [--lk-levels L] [--border-px PX]\n"
+        "  Converts an EuRoC/ASL recording into an sfd log (IMU, CAMERA_INFO, FEATURES from\n"
+        "  the OpenCV tracker, TRUTH at the frame times when ground truth is given).\n"
+        "  --euroc DIR      standard layout: DIR/mav0 (or DIR = mav0) with imu0/data.csv,\n"
+        "                   camN/data.csv, camN/data/<ns>.png, camN/sensor.yaml and, if present,\n"
+        "                   state_groundtruth_estimate0/data.csv; explicit flags override\n"
+        "  --cam camN       camera folder for --euroc (default cam0)\n"
+        "  --images DIR     image folder (8-bit grayscale PNG/JPEG, read as grayscale)\n"
+        "  --frames CSV     EuRoC camera data.csv (timestamp [ns], file name); default: every\n"
+        "                   <ns>.png/.jpg in --images, by time\n"
+        "  --imu CSV        EuRoC imu0/data.csv (t [ns], gyro xyz [rad/s], accel xyz [m/s^2])\n"
+        "  --calib YAML     EuRoC camera sensor.yaml (T_BS, resolution, intrinsics, distortion)\n"
+        "  --gt CSV         EuRoC ground truth (t [ns], p xyz [m], q w x y z, ...): TRUTH poses\n"
+        "                   interpolated at the frame times (no spurious labels)\n"
+        "  --max-frames N   convert the first N frames only (default: all)\n"
+        "  --imu-before-s S IMU kept from S seconds before the first frame (default 1.0) to\n"
+        "                   the last frame; the count of samples left out is printed\n"
+        "  --camera-id ID   camera_id of CAMERA_INFO and FEATURES (default 0)\n"
+        "  tracker (drivers/opencv/sfd_feature_tracker.hpp):\n"
+        "  --max-features N      tracks per frame, 1..%d (default 150)\n"
+        "  --min-distance-px PX  spacing between tracks (default 20)\n"
+        "  --no-fb-check         plain pyramidal LK, no forward-backward check\n"
+        "  --fb-threshold-px PX  forward-backward round-trip limit (default 1.0)\n"
+        "  --quality-level Q     Shi-Tomasi quality level (default 0.01)\n"
+        "  --lk-window-px W      LK window side, odd (default 21)\n"
+        "  --lk-levels L         LK pyramid levels (default 3)\n"
+        "  --border-px PX        image border without features (default 8)\n"
+        "Exit: 0 ok, 2 bad usage or bad/missing input (the message names file and line),\n"
+        "1 write failure.\n",
+        sfd::kTrackerMaxFeatures);
+}
+
+bool file_exists(const std::string &p) {
+    struct stat st;
+    return ::stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+bool dir_exists(const std::string &p) {
+    struct stat st;
+    return ::stat(p.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+std::string trim(const std::string &s) {
+    size_t a = 0, b = s.size();
+    while (a < b && std::isspace(static_cast<unsigned char>(s[a]))) ++a;
+    while (b > a && std::isspace(static_cast<unsigned char>(s[b - 1]))) --b;
+    return s.substr(a, b - a);
+}
+
+// One data row of a EuRoC CSV: the ns timestamp and the remaining fields.
+struct Row {
+    int64_t t_ns;
+    std::vector<std::string> fields;  // after the timestamp, trimmed
+    int line;
+};
+
+// Reads a EuRoC CSV: '#' lines and blank lines skipped, comma-separated, first field an integer
+// timestamp (ns), strictly increasing, at least min_fields fields after it. On error: false and
+// "path:line: reason".
+bool read_csv(const std::string &path, size_t min_fields, std::vector<Row> *rows,
+              std::string *err) {
+    std::ifstream in(path);
+    if (!in) {
+        *err = path + ": cannot open";
+        return false;
+    }
+    std::string line;
+    int n = 0;
+    while (std::getline(in, line)) {
+        ++n;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        const std::string t = trim(line);
+        if (t.empty() || t[0] == '#') continue;
+        std::vector<std::string> f;
+        std::stringstream ss(t);
+        std::string item;
+        while (std::getline(ss, item, ',')) f.push_back(trim(item));
+        const std::string where = path + ":" + std::to_string(n) + ": ";
+        if (f.size() < min_fields + 1) {
+            *err = where + "expected at least " + std::to_string(min_fields + 1) +
+                   " comma-separated fields, got " + std::to_string(f.size());
+            return false;
+        }
+        char *end = nullptr;
+        errno = 0;
+        const long long ts = std::strtoll(f[0].c_str(), &end, 10);
+        if (f[0].empty() || *end != '\0' || errno != 0 || ts < 0) {
+            *err = where + "timestamp '" + f[0] + "' is not a non-negative integer (ns)";
+            return false;
+        }
+        if (!rows->empty() && ts <= rows->back().t_ns) {
+            *err = where + "timestamp " + f[0] + " not after the previous row's";
+            return false;
+        }
+        f.erase(f.begin());
+        rows->push_back(Row{ts, f, n});
+    }
+    if (rows->empty()) {
+        *err = path + ": no data rows";
+        return false;
+    }
+    return true;
+}
+
+// Parses fields [0, count) of a row as finite doubles.
+bool row_numbers(const std::string &path, const Row &r, size_t count, double *out,
+                 std::string *err) {
+    for (size_t i = 0; i < count; ++i) {
+        char *end = nullptr;
+        out[i] = std::strtod(r.fields[i].c_str(), &end);
+        if (r.fields[i].empty() || *end != '\0' || !std::isfinite(out[i])) {
+            *err = path + ":" + std::to_string(r.line) + ": field " + std::to_string(i + 2) + " '" +
+                   r.fields[i] + "' is not a finite number";
+            return false;
+        }
+    }
+    return true;
+}
+
+struct Calib {
+    int width = 0, height = 0;
+    double fx = 0, fy = 0, cx = 0, cy = 0;
+    int model = SFD_DISTORTION_RADTAN;
+    double dist[4] = {0, 0, 0, 0};
+    double T_imu_cam[16] = {0};
+};
+
+bool read_seq(const cv::FileNode &n, size_t count, double *out) {
+    if (!n.isSeq() || n.size() != count) return false;
+    for (size_t i = 0; i < count; ++i) {
+        const cv::FileNode e = n[int(i)];
+        if (!e.isReal() && !e.isInt()) return false;
+        out[i] = double(e);
+        if (!std::isfinite(out[i])) return false;
+    }
+    return true;
+}
+
+// Reads an EuRoC camera sensor.yaml and checks it with the core's camera model and extrinsics.
+bool read_calib(const std::string &path, Calib *c, std::string *err) {
+    if (!file_exists(path)) {
+        *err = path + ": no such file";
+        return false;
+    }
+    cv::FileStorage fs;
+    try {
+        fs.open(path, cv::FileStorage::READ);
+    } catch (const cv::Exception &e) {
+        *err = path + ": not readable as YAML: " + e.msg;
+        return false;
+    }
+    if (!fs.isOpened()) {
+        *err =
+            path + ": not readable as YAML (cv::FileStorage; the file must begin with %YAML:1.0)";
+        return false;
+    }
+    const auto fail = [&](const std::string &why) {
+        *err = path + ": " + why;
+        return false;
+    };
+    const std::string model = fs["camera_model"].isString() ? std::string(fs["camera_model"]) : "";
+    if (model != "pinhole") return fail("camera_model must be 'pinhole', got '" + model + "'");
+    double res[2], intr[4];
+    if (!read_seq(fs["resolution"], 2, res)) return fail("resolution: expected [width, height]");
+    if (!read_seq(fs["intrinsics"], 4, intr)) return fail("intrinsics: expected [fu, fv, cu, cv]");
+    c->width = int(res[0]);
+    c->height = int(res[1]);
+    c->fx = intr[0];
+    c->fy = intr[1];
+    c->cx = intr[2];
+    c->cy = intr[3];
+    const std::string dm =
+        fs["distortion_model"].isString() ? std::string(fs["distortion_model"]) : "";
+    if (dm == "radial-tangential" || dm == "radtan") {
+        c->model = SFD_DISTORTION_RADTAN;
+    } else if (dm == "equidistant") {
+        c->model = SFD_DISTORTION_EQUIDISTANT;
+    } else {
+        return fail("distortion_model must be radial-tangential or equidistant, got '" + dm + "'");
+    }
+    if (!read_seq(fs["distortion_coefficients"], 4, c->dist))
+        return fail("distortion_coefficients: expected 4 numbers");
+    const cv::FileNode T = fs["T_BS"];
+    if (!T.isMap() || !read_seq(T["data"], 16, c->T_imu_cam))
+        return fail("T_BS: expected a map with data: [16 numbers] (row-major 4x4)");
+    sfd_camera_t cam;
+    if (sfd_camera_init(&cam, c->model, c->width, c->height, c->fx, c->fy, c->cx, c->cy, c->dist) !=
+        SFD_OK) {
+        return fail("the core camera model rejects this calibration (size, focal length)");
+    }
+    sfd_extrinsics_t ext;
+    if (sfd_extrinsics_from_matrix(&ext, c->T_imu_cam) != SFD_OK)
+        return fail(
+            "T_BS is not a rigid transform (rotation orthonormal within 1e-6, last row 0 0 0 1)");
+    return true;
+}
+
+struct Frame {
+    int64_t t_ns;
+    std::string path;
+};
+
+// Frame list: from a EuRoC camera data.csv, or every <digits>.png/.jpg in the image folder.
+bool list_frames(const std::string &images, const std::string &frames_csv,
+                 std::vector<Frame> *frames, std::string *err) {
+    if (!dir_exists(images)) {
+        *err = images + ": no such folder";
+        return false;
+    }
+    if (!frames_csv.empty()) {
+        std::vector<Row> rows;
+        if (!read_csv(frames_csv, 1, &rows, err)) return false;
+        for (const Row &r : rows) frames->push_back(Frame{r.t_ns, images + "/" + r.fields[0]});
+        return true;
+    }
+    DIR *d = ::opendir(images.c_str());
+    if (d == nullptr) {
+        *err = images + ": cannot list";
+        return false;
+    }
+    for (const dirent *e = ::readdir(d); e != nullptr; e = ::readdir(d)) {
+        const std::string name = e->d_name;
+        const size_t dot = name.rfind('.');
+        if (dot == std::string::npos || dot == 0) continue;
+        const std::string stem = name.substr(0, dot), ext = name.substr(dot);
+        if (ext != ".png" && ext != ".jpg" && ext != ".jpeg") continue;
+        if (stem.empty() || stem.find_first_not_of("0123456789") != std::string::npos) continue;
+        errno = 0;
+        const long long t_ns = std::strtoll(stem.c_str(), nullptr, 10);
+        if (errno != 0) continue;  // more than int64 ns: not a EuRoC timestamp
+        std::string path = images;
+        path += '/';
+        path += name;
+        frames->push_back(Frame{t_ns, path});
+    }
+    ::closedir(d);
+    std::sort(frames->begin(), frames->end(),
+              [](const Frame &a, const Frame &b) { return a.t_ns < b.t_ns; });
+    for (size_t i = 1; i < frames->size(); ++i) {
+        if ((*frames)[i].t_ns == (*frames)[i - 1].t_ns) {
+            *err = images + ": two images with the timestamp " + std::to_string((*frames)[i].t_ns);
+            return false;
+        }
+    }
+    if (frames->empty()) {
+        *err = images + ": no <timestamp_ns>.png/.jpg images";
+        return false;
+    }
+    return true;
+}
+
+struct Pose {
+    int64_t t_ns;
+    double p[3];
+    double q[4];  // w x y z
+};
+
+// Pose at t by linear interpolation of the position and slerp of the orientation between the
+// bracketing rows (Shoemake 1985); false when t is outside the rows or the gap exceeds max_gap.
+bool interpolate(const std::vector<Pose> &gt, int64_t t, int64_t max_gap_ns, Pose *out) {
+    const auto it = std::lower_bound(gt.begin(), gt.end(), t,
+                                     [](const Pose &p, int64_t v) { return p.t_ns < v; });
+    if (it == gt.end()) return false;
+    if (it->t_ns == t) {
+        *out = *it;
+        return true;
+    }
+    if (it == gt.begin()) return false;
+    const Pose &a = *(it - 1), &b = *it;
+    if (b.t_ns - a.t_ns > max_gap_ns) return false;
+    const double s = double(t - a.t_ns) / double(b.t_ns - a.t_ns);
+    out->t_ns = t;
+    for (int k = 0; k < 3; ++k) out->p[k] = a.p[k] + s * (b.p[k] - a.p[k]);
+    double qb[4], dot = 0;
+    for (int k = 0; k < 4; ++k) dot += a.q[k] * b.q[k];
+    for (int k = 0; k < 4; ++k) qb[k] = dot < 0 ? -b.q[k] : b.q[k];
+    dot = std::fabs(dot);
+    double wa = 1.0 - s, wb = s;
+    if (dot < 0.9995) {
+        const double th = std::acos(std::min(1.0, dot));
+        wa = std::sin((1.0 - s) * th) / std::sin(th);
+        wb = std::sin(s * th) / std::sin(th);
+    }
+    double n = 0;
+    for (int k = 0; k < 4; ++k) {
+        out->q[k] = wa * a.q[k] + wb * qb[k];
+        n += out->q[k] * out->q[k];
+    }
+    n = std::sqrt(n);
+    for (int k = 0; k < 4; ++k) out->q[k] /= n;
+    return true;
+}
+
+// Events before writing: sorted by time, then by kind (IMU, CAMERA_INFO, FEATURES, TRUTH at one
+// time, as sfd-sim writes them), then by order of creation.
+struct LogEvent {
+    int64_t utime;
+    int rank;
+    size_t seq;
+    const char *channel;
+    std::vector<uint8_t> data;
+};
+
+bool parse_int(const char *flag, const char *s, long lo, long hi, long *out) {
+    char *end = nullptr;
+    errno = 0;
+    const long v = std::strtol(s, &end, 10);
+    if (*s == '\0' || *end != '\0' || errno != 0 || v < lo || v > hi) {
+        std::fprintf(stderr, "%s: %s: expected an integer %ld..%ld, got '%s'\n", kProg, flag, lo,
+                     hi, s);
+        return false;
+    }
+    *out = v;
+    return true;
+}
+bool parse_real(const char *flag, const char *s, double lo, double hi, double *out) {
+    char *end = nullptr;
+    const double v = std::strtod(s, &end);
+    if (*s == '\0' || *end != '\0' || !(v >= lo && v <= hi)) {
+        std::fprintf(stderr, "%s: %s: expected a number in [%g, %g], got '%s'\n", kProg, flag, lo,
+                     hi, s);
+        return false;
+    }
+    *out = v;
+    return true;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    std::string euroc, images, frames_csv, imu_csv, calib_yaml, gt_csv, out_path, cam = "cam0";
+    long max_frames = 0, camera_id = 0;
+    double imu_before_s = 1.0;
+    sfd::TrackerConfig tc;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const bool has = i + 1 < argc;
+        long iv = 0;
+        if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
+            usage(stdout);
+            return 0;
+        } else if (!std::strcmp(a, "--euroc") && has) {
+            euroc = argv[++i];
+        } else if (!std::strcmp(a, "--cam") && has) {
+            cam = argv[++i];
+        } else if (!std::strcmp(a, "--images") && has) {
+            images = argv[++i];
+        } else if (!std::strcmp(a, "--frames") && has) {
+            frames_csv = argv[++i];
+        } else if (!std::strcmp(a, "--imu") && has) {
+            imu_csv = argv[++i];
+        } else if (!std::strcmp(a, "--calib") && has) {
+            calib_yaml = argv[++i];
+        } else if (!std::strcmp(a, "--gt") && has) {
+            gt_csv = argv[++i];
+        } else if (!std::strcmp(a, "-o") && has) {
+            out_path = argv[++i];
+        } else if (!std::strcmp(a, "--max-frames") && has) {
+            if (!parse_int(a, argv[++i], 1, 100000000, &max_frames)) return 2;
+        } else if (!std::strcmp(a, "--camera-id") && has) {
+            if (!parse_int(a, argv[++i], 0, 2147483647, &camera_id)) return 2;
+        } else if (!std::strcmp(a, "--imu-before-s") && has) {
+            if (!parse_real(a, argv[++i], 0.0, 1e6, &imu_before_s)) return 2;
+        } else if (!std::strcmp(a, "--max-features") && has) {
+            if (!parse_int(a, argv[++i], 1, sfd::kTrackerMaxFeatures, &iv)) return 2;
+            tc.max_features = int(iv);
+        } else if (!std::strcmp(a, "--min-distance-px") && has) {
+            if (!parse_real(a, argv[++i], 0.0, 1000.0, &tc.min_distance_px)) return 2;
+        } else if (!std::strcmp(a, "--no-fb-check")) {
+            tc.fb_check = false;
+        } else if (!std::strcmp(a, "--fb-threshold-px") && has) {
+            if (!parse_real(a, argv[++i], 1e-6, 1000.0, &tc.fb_threshold_px)) return 2;
+        } else if (!std::strcmp(a, "--quality-level") && has) {
+            if (!parse_real(a, argv[++i], 1e-9, 0.999999, &tc.quality_level)) return 2;
+        } else if (!std::strcmp(a, "--lk-window-px") && has) {
+            if (!parse_int(a, argv[++i], 5, 101, &iv)) return 2;
+            tc.lk_window_px = int(iv);
+        } else if (!std::strcmp(a, "--lk-levels") && has) {
+            if (!parse_int(a, argv[++i], 0, 8, &iv)) return 2;
+            tc.lk_pyramid_levels = int(iv);
+        } else if (!std::strcmp(a, "--border-px") && has) {
+            if (!parse_int(a, argv[++i], 0, 1000, &iv)) return 2;
+            tc.border_px = int(iv);
+        } else {
+            std::fprintf(stderr, "%s: unknown or incomplete option: %s\n", kProg, a);
+            usage(stderr);
+            return 2;
+        }
+    }
+    std::string err;
+    if (!sfd::FeatureTracker::validate(tc, &err)) {
+        std::fprintf(stderr, "%s: tracker: %s\n", kProg, err.c_str());
+        return 2;
+    }
+    if (!euroc.empty()) {
+        std::string mav = euroc + "/mav0";
+        if (!dir_exists(mav)) mav = euroc;
+        if (!dir_exists(mav + "/imu0")) {
+            std::fprintf(stderr, "%s: --euroc %s: no mav0/imu0 folder (EuRoC layout)\n", kProg,
+                         euroc.c_str());
+            return 2;
+        }
+        if (images.empty()) images = mav + "/" + cam + "/data";
+        if (frames_csv.empty() && file_exists(mav + "/" + cam + "/data.csv"))
+            frames_csv = mav + "/" + cam + "/data.csv";
+        if (imu_csv.empty()) imu_csv = mav + "/imu0/data.csv";
+        if (calib_yaml.empty()) calib_yaml = mav + "/" + cam + "/sensor.yaml";
+        const std::string gt = mav + "/state_groundtruth_estimate0/data.csv";
+        if (gt_csv.empty() && file_exists(gt)) gt_csv = gt;
+    }
+    if (images.empty() || imu_csv.empty() || calib_yaml.empty() || out_path.empty()) {
+        std::fprintf(stderr, "%s: need --euroc DIR or --images, --imu and --calib; and -o\n",
+                     kProg);
+        usage(stderr);
+        return 2;
+    }
+
+    Calib calib;
+    std::vector<Frame> frames;
+    std::vector<Row> imu_rows, gt_rows;
+    if (!read_calib(calib_yaml, &calib, &err) || !list_frames(images, frames_csv, &frames, &err) ||
+        !read_csv(imu_csv, 6, &imu_rows, &err) ||
+        (!gt_csv.empty() && !read_csv(gt_csv, 7, &gt_rows, &err))) {
+        std::fprintf(stderr, "%s: %s\n", kProg, err.c_str());
+        return 2;
+    }
+    if (max_frames > 0 && frames.size() > size_t(max_frames)) frames.resize(size_t(max_frames));
+    std::vector<Pose> gt;
+    for (const Row &r : gt_rows) {
+        double v[7];
+        if (!row_numbers(gt_csv, r, 7, v, &err)) {
+            std::fprintf(stderr, "%s: %s\n", kProg, err.c_str());
+            return 2;
+        }
+        Pose p{r.t_ns, {v[0], v[1], v[2]}, {v[3], v[4], v[5], v[6]}};
+        const double qn = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+        if (!(std::fabs(qn - 1.0) < 1e-3)) {
+            std::fprintf(stderr, "%s: %s:%d: quaternion norm %.6f, expected 1 (w x y z)\n", kProg,
+                         gt_csv.c_str(), r.line, qn);
+            return 2;
+        }
+        for (double &q : p.q) q /= qn;
+        gt.push_back(p);
+    }
+
+    std::vector<LogEvent> events;
+    size_t seq = 0;
+    std::vector<uint8_t> buf(size_t{64} * 1024);
+    auto add = [&](int64_t utime, int rank, const char *ch, int n) {
+        events.push_back(
+            LogEvent{utime, rank, seq++, ch, std::vector<uint8_t>(buf.begin(), buf.begin() + n)});
+    };
+    const int64_t first_ns = frames.front().t_ns, last_ns = frames.back().t_ns;
+    const int64_t imu_from_ns = first_ns - int64_t(imu_before_s * 1e9);
+    long imu_written = 0, imu_skipped = 0;
+    for (const Row &r : imu_rows) {
+        if (r.t_ns < imu_from_ns || r.t_ns > last_ns + 50000000) {
+            ++imu_skipped;  // outside [first frame - imu_before_s, last frame + 50 ms]
+            continue;
+        }
+        double v[6];
+        if (!row_numbers(imu_csv, r, 6, v, &err)) {
+            std::fprintf(stderr, "%s: %s\n", kProg, err.c_str());
+            return 2;
+        }
+        sfd_imu_t m;
+        m.utime = r.t_ns / 1000;
+        std::memcpy(m.gyro, v, sizeof m.gyro);
+        std::memcpy(m.accel, v + 3, sizeof m.accel);
+        add(m.utime, 0, "IMU", sfd_imu_t_encode(buf.data(), 0, int(buf.size()), &m));
+        ++imu_written;
+    }
+    if (imu_written == 0) {
+        std::fprintf(stderr,
+                     "%s: %s: no IMU sample between %.3f s before the first frame and "
+                     "the last frame (frames %lld..%lld ns)\n",
+                     kProg, imu_csv.c_str(), imu_before_s, static_cast<long long>(first_ns),
+                     static_cast<long long>(last_ns));
+        return 2;
+    }
+
+    static sfd_camera_info_t ci;
+    std::memset(&ci, 0, sizeof ci);
+    ci.utime = std::min(events.front().utime, first_ns / 1000);
+    ci.camera_id = int32_t(camera_id);
+    ci.width = calib.width;
+    ci.height = calib.height;
+    ci.fx = calib.fx;
+    ci.fy = calib.fy;
+    ci.cx = calib.cx;
+    ci.cy = calib.cy;
+    ci.distortion_model = calib.model == SFD_DISTORTION_EQUIDISTANT ? SFD_CAMERA_INFO_T_EQUIDISTANT
+                                                                    : SFD_CAMERA_INFO_T_RADTAN;
+    std::memcpy(ci.distortion, calib.dist, sizeof ci.distortion);
+    std::memcpy(ci.T_imu_cam, calib.T_imu_cam, sizeof ci.T_imu_cam);
+    add(ci.utime, -1, "CAMERA_INFO", sfd_camera_info_t_encode(buf.data(), 0, int(buf.size()), &ci));
+
+    sfd::FeatureTracker tracker(tc);
+    static sfd_feature_frame_t ff;
+    static sfd_truth_t tr;
+    long features_total = 0, truth_written = 0, lost_fb = 0, lost_lk = 0;
+    for (const Frame &f : frames) {
+        // OpenCV reports some failures (corrupt files, internal checks) by exception: turned
+        // into an error message naming the image, never a crash.
+        cv::Mat img;
+        try {
+            img = cv::imread(f.path, cv::IMREAD_GRAYSCALE);
+        } catch (const cv::Exception &e) {
+            std::fprintf(stderr, "%s: %s: %s\n", kProg, f.path.c_str(), e.what());
+            return 2;
+        }
+        if (img.empty()) {
+            std::fprintf(stderr, "%s: %s: cannot read the image\n", kProg, f.path.c_str());
+            return 2;
+        }
+        if (img.cols != calib.width || img.rows != calib.height) {
+            std::fprintf(stderr, "%s: %s: %dx%d image, calibration %s says %dx%d\n", kProg,
+                         f.path.c_str(), img.cols, img.rows, calib_yaml.c_str(), calib.width,
+                         calib.height);
+            return 2;
+        }
+        bool tracked = false;
+        try {
+            tracked = tracker.track(img, &err);
+        } catch (const cv::Exception &e) {
+            err = std::string("OpenCV: ") + e.what();
+        }
+        if (!tracked) {
+            std::fprintf(stderr, "%s: %s: tracker: %s\n", kProg, f.path.c_str(), err.c_str());
+            return 2;
+        }
+        std::memset(&ff, 0, sizeof ff);
+        ff.utime = f.t_ns / 1000;
+        ff.camera_id = int32_t(camera_id);
+        const auto &tracks = tracker.tracks();
+        ff.num_features = int32_t(tracks.size());  // <= kTrackerMaxFeatures <= 512
+        for (size_t k = 0; k < tracks.size(); ++k) {
+            ff.track_id[k] = tracks[k].id;
+            ff.u[k] = tracks[k].u_px;
+            ff.v[k] = tracks[k].v_px;
+            ff.depth[k] = 0.0;  // no depth prior (the node uses default_depth_m)
+            ff.depth_var[k] = 0.0;
+        }
+        features_total += ff.num_features;
+        lost_fb += tracker.stats().lost_fb;
+        lost_lk += tracker.stats().lost_lk;
+        add(ff.utime, 2, "FEATURES",
+            sfd_feature_frame_t_encode(buf.data(), 0, int(buf.size()), &ff));
+        Pose p;
+        if (!gt.empty() && interpolate(gt, f.t_ns, 100000000, &p)) {
+            std::memset(&tr, 0, sizeof tr);
+            tr.utime = ff.utime;
+            std::memcpy(tr.position, p.p, sizeof tr.position);
+            std::memcpy(tr.orientation, p.q, sizeof tr.orientation);
+            tr.num_features = 0;  // real data: no spurious labels
+            add(tr.utime, 3, "TRUTH", sfd_truth_t_encode(buf.data(), 0, int(buf.size()), &tr));
+            ++truth_written;
+        }
+    }
+    std::sort(events.begin(), events.end(), [](const LogEvent &a, const LogEvent &b) {
+        if (a.utime != b.utime) return a.utime < b.utime;
+        if (a.rank != b.rank) return a.rank < b.rank;
+        return a.seq < b.seq;
+    });
+    lcm_eventlog_t *log = lcm_eventlog_create(out_path.c_str(), "w");
+    if (log == nullptr) {
+        std::fprintf(stderr, "%s: -o %s: cannot open for writing\n", kProg, out_path.c_str());
+        return 2;
+    }
+    bool failed = false;
+    for (LogEvent &e : events) {
+        lcm_eventlog_event_t ev;
+        std::memset(&ev, 0, sizeof ev);
+        ev.timestamp = e.utime;
+        ev.channellen = int32_t(std::strlen(e.channel));
+        ev.channel = const_cast<char *>(e.channel);
+        ev.datalen = int32_t(e.data.size());
+        ev.data = e.data.data();
+        if (lcm_eventlog_write_event(log, &ev) != 0) failed = true;
+    }
+    lcm_eventlog_destroy(log);
+    if (failed) {
+        std::fprintf(stderr, "%s: -o %s: write failed\n", kProg, out_path.c_str());
+        return 1;
+    }
+    std::printf(
+        "%s: wrote %s: %zu frames (%.1f features per frame; tracker lost %ld to LK, %ld "
+        "to the forward-backward check%s), %ld IMU samples (%ld outside [first frame - "
+        "%.2f s, last frame + 0.05 s] left out), 1 CAMERA_INFO, %ld TRUTH%s\n",
+        kProg, out_path.c_str(), frames.size(), double(features_total) / double(frames.size()),
+        lost_lk, lost_fb, tc.fb_check ? "" : ", off", imu_written, imu_skipped, imu_before_s,
+        truth_written,
+        gt.empty() ? " (no ground truth given)" : " (poses only, no spurious labels)");
+    // EuRoC ground truth also holds the estimated biases (fields 11-13: b_w, rad/s): printed for
+    // the node's gyro_bias_rad_s (filter.init_from_truth starts the filter with that bias).
+    for (const Row &r : gt_rows) {
+        double v[10];
+        if (r.t_ns >= first_ns && r.fields.size() >= 13 && row_numbers(gt_csv, r, 10, v, &err)) {
+            double bw[3];
+            const Row shifted{r.t_ns, {r.fields.begin() + 10, r.fields.begin() + 13}, r.line};
+            if (row_numbers(gt_csv, shifted, 3, bw, &err)) {
+                std::printf(
+                    "%s: ground-truth gyro bias at the first frame: [%.6f, %.6f, %.6f] "
+                    "rad/s\n",
+                    kProg, bw[0], bw[1], bw[2]);
+            }
+            break;
+        }
+    }
+    if (!gt.empty() && truth_written < long(frames.size())) {
+        std::printf("%s: %ld frames have no TRUTH (outside the ground truth or a gap > 0.1 s)\n",
+                    kProg, long(frames.size()) - truth_written);
+    }
+    return 0;
+}
