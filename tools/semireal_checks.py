@@ -16,6 +16,11 @@
       spurious in every frame they appear are the moving group's; the other spurious labels come
       from steps (jumps, drift steps, mismatches). Prints the fraction judged SPURIOUS and
       UNTESTED per kind.
+
+  semireal_checks.py trace OUT.lcmlog [--every 80]
+      The filter's error along an sfd-replay output log: every N frames, SFD_STATE against TRUTH:
+      position error (m), velocity error (m/s, against TRUTH's central difference), attitude error
+      angle (deg), and the filter's position standard deviation (m, from position_var).
 """
 import argparse
 import collections
@@ -146,6 +151,33 @@ def check_kinds(path):
                   (kind, n, c[(kind, 2)] / n, c[(kind, 0)] / n))
 
 
+def check_trace(path, every):
+    sys.path.insert(0, os.environ.get("SFD_LCM_PYTHON", ""))
+    import lcm
+    from sfd import nav_state_t, truth_t
+    st, tr = {}, {}
+    for ev in lcm.EventLog(path, "r"):
+        if ev.channel == "SFD_STATE":
+            m = nav_state_t.decode(ev.data)
+            st[m.utime] = (np.array(m.position), np.array(m.velocity), m.orientation,
+                           np.sqrt(np.array(m.position_var)))
+        elif ev.channel == "TRUTH":
+            m = truth_t.decode(ev.data)
+            tr[m.utime] = (np.array(m.position), m.orientation)
+    ts = sorted(set(st) & set(tr))
+    print("   t (s)  |dp| (m)  |dv| (m/s)  attitude (deg)  position sd (m, x y z)")
+    for k in range(0, len(ts), every):
+        t = ts[k]
+        if 0 < k < len(ts) - 1:
+            v_true = (tr[ts[k + 1]][0] - tr[ts[k - 1]][0]) / ((ts[k + 1] - ts[k - 1]) * 1e-6)
+            dv = "%10.3f" % np.linalg.norm(st[t][1] - v_true)
+        else:
+            dv = "       n/a"
+        att = np.degrees(so3_angle(q_to_R(tr[t][1]).T @ q_to_R(st[t][2])))
+        print("%8.2f  %8.3f  %s  %14.2f  %s" % ((t - ts[0]) * 1e-6, np.linalg.norm(st[t][0] - tr[t][0]),
+                                               dv, att, " ".join("%.3f" % x for x in st[t][3])))
+
+
 def main():
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -155,13 +187,18 @@ def main():
                                                       "euroc_v1_02_imu_gt"))
     a_k = sub.add_parser("kinds")
     a_k.add_argument("log")
+    a_t = sub.add_parser("trace")
+    a_t.add_argument("log")
+    a_t.add_argument("--every", type=int, default=80)
     a = ap.parse_args()
+    os.environ.setdefault("SFD_LCM_PYTHON",
+                          os.path.join(root, "build", "host", "lcm_types", "python"))
     if a.cmd == "imu":
         check_imu(a.data)
-    else:
-        os.environ.setdefault("SFD_LCM_PYTHON",
-                              os.path.join(root, "build", "host", "lcm_types", "python"))
+    elif a.cmd == "kinds":
         check_kinds(a.log)
+    else:
+        check_trace(a.log, a.every)
 
 
 if __name__ == "__main__":
