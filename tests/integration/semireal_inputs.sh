@@ -8,7 +8,7 @@
 #  - malformed inputs exit with 2 and a one-line reason naming the file and line (or field):
 #    a non-numeric field, a wrong field count, a timestamp going backwards, a non-unit
 #    quaternion, a ground-truth gap over 0.2 s, a missing sensor.yaml key, a missing folder;
-#    bad options exit with 2.
+#    bad options exit with 2; sfd-replay refuses a malformed filter.init_accel_bias_m_s2.
 # usage: semireal_inputs.sh BUILD_DIR PYTHON PYTHONPATH_FOR_TYPES
 set -euo pipefail
 build="$1"; py="$2"; pytypes="$3"
@@ -87,6 +87,16 @@ PYEOF
 grep -q "init_accel_bias_m_s2: \[ 0.02, -0.029999999999999999, 0.040000000000000001 \]" \
   "$tmp/good.yaml" || { echo "FAIL: --config-out lacks the ground truth's b_a"; cat "$tmp/good.yaml"; exit 1; }
 "$build/apps/sfd-replay" "$tmp/good.lcmlog" --config "$tmp/good.yaml" --method none >/dev/null
+# the node key it writes is validated: two numbers are refused with the key named
+sed 's/init_accel_bias_m_s2: \[.*\]/init_accel_bias_m_s2: [ 0.1, 0.2 ]/' "$tmp/good.yaml" > "$tmp/bad2.yaml"
+set +e
+"$build/apps/sfd-replay" "$tmp/good.lcmlog" --config "$tmp/bad2.yaml" >/dev/null 2>"$tmp/err.txt"
+rc=$?
+set -e
+if [ "$rc" -ne 2 ] || ! grep -q "filter.init_accel_bias_m_s2: expected a list of 3 numbers" "$tmp/err.txt"; then
+  echo "FAIL: a 2-element init_accel_bias_m_s2 was not refused (exit $rc)"; cat "$tmp/err.txt"; exit 1
+fi
+echo "sfd-replay config: $(cat "$tmp/err.txt")"
 
 # --- malformed inputs: exit 2 and the reason --------------------------------------------------
 expect_fail() {  # expect_fail NAME PATTERN ARGS...: exit code 2, stderr matching PATTERN
