@@ -199,7 +199,7 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
         int32_t *fint_dst[] = {&nv.enabled, &nv.gyro_bias_at_rest, &nv.init_from_truth,
                                &nv.consider_position};
         for (const std::string &key : flt.keys()) {
-            bool found = false;
+            bool found = key == "init_accel_bias_m_s2";
             for (const FKey &k : fnums) found = found || key == k.name;
             for (const char *k : fints) found = found || key == k;
             if (!found) {
@@ -214,6 +214,18 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
                 return false;
             }
             *k.dst = d;
+        }
+        const cv::FileNode ab = flt["init_accel_bias_m_s2"];
+        if (!ab.empty()) {
+            const std::string w = where("filter.init_accel_bias_m_s2");
+            if (!ab.isSeq() || ab.size() != 3) {
+                *error = w + ": expected a list of 3 numbers";
+                return false;
+            }
+            for (int k = 0; k < 3; ++k) {
+                if (!read_number(ab[k], w, &d, error)) return false;
+                nv.init_accel_bias_m_s2[k] = d;
+            }
         }
         for (int k = 0; k < 4; ++k) {
             if (flt[fints[k]].empty()) continue;

@@ -18,13 +18,12 @@
 // whose window mixes observations of both points (default 2, for L = 3).
 #include "flight_log.hpp"
 
-#include <lcm/eventlog.h>
-
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <vector>
 
+#include "lcm_log.hpp"
 #include "sfd/sfd.h"
 #include "sfd_camera_info_t.h"
 #include "sfd_feature_frame_t.h"
@@ -93,29 +92,6 @@ struct Landmark {
     bool mover;
 };
 
-class LogWriter {
-  public:
-    explicit LogWriter(const std::string &path) : log_(lcm_eventlog_create(path.c_str(), "w")) {}
-    ~LogWriter() {
-        if (log_ != nullptr) lcm_eventlog_destroy(log_);
-    }
-    bool ok() const { return log_ != nullptr && !failed_; }
-    void write(const char *channel, int64_t utime, const std::vector<uint8_t> &data, int size) {
-        lcm_eventlog_event_t ev;
-        std::memset(&ev, 0, sizeof ev);
-        ev.timestamp = utime;
-        ev.channellen = static_cast<int32_t>(std::strlen(channel));
-        ev.datalen = size;
-        ev.channel = const_cast<char *>(channel);
-        ev.data = const_cast<uint8_t *>(data.data());
-        if (lcm_eventlog_write_event(log_, &ev) != 0) failed_ = true;
-    }
-
-  private:
-    lcm_eventlog_t *log_;
-    bool failed_ = false;
-};
-
 }  // namespace
 
 int write_flight_log(const FlightOptions &opt) {
@@ -141,22 +117,13 @@ int write_flight_log(const FlightOptions &opt) {
     const int64_t t_start_us = 1000000;
 
     // CAMERA_INFO first (and once per second, as a live publisher would).
-    sfd_camera_info_t ci;
-    std::memset(&ci, 0, sizeof ci);
-    ci.camera_id = 0;
-    ci.width = cam.width_px;
-    ci.height = cam.height_px;
-    ci.fx = cam.fx_px;
-    ci.fy = cam.fy_px;
-    ci.cx = cam.cx_px;
-    ci.cy = cam.cy_px;
-    ci.distortion_model = SFD_CAMERA_INFO_T_RADTAN;
-    std::memcpy(ci.distortion, dist, sizeof dist);
+    double T_imu_cam[16] = {0};
     for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) ci.T_imu_cam[4 * r + c] = R_CtoB[3 * r + c];
-        ci.T_imu_cam[4 * r + 3] = p_CinB[r];
+        for (int c = 0; c < 3; ++c) T_imu_cam[4 * r + c] = R_CtoB[3 * r + c];
+        T_imu_cam[4 * r + 3] = p_CinB[r];
     }
-    ci.T_imu_cam[15] = 1.0;
+    T_imu_cam[15] = 1.0;
+    sfd_camera_info_t ci = camera_info_of(cam, T_imu_cam);
 
     auto camera_pose = [&](double t, double R_CtoW[9], double p_CinW[3]) {
         const Pose P = traj.at(t);

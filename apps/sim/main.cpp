@@ -20,6 +20,7 @@
 #include <cstring>
 #include <vector>
 
+#include "euroc_semireal.hpp"
 #include "flight_log.hpp"
 #include "paper_uav.hpp"
 #include "thesis_loop.hpp"
@@ -48,6 +49,15 @@ struct Options {
     int truth_window = 2;
     int runs = -1;  // scenario default
     bool quick = false;
+    // euroc-semireal (apps/sim/euroc_semireal.hpp); negative: the scenario's default
+    const char *euroc_dir = nullptr;
+    const char *config_out = nullptr;
+    double camera_hz = 20.0;
+    double spurious_fraction = 0.1;
+    double pixel_sigma = -1.0;
+    double semireal_depth_var = -1.0;
+    double track_loss = 0.02;
+    double mover_speed = 0.5;
 };
 
 void usage(FILE *out) {
@@ -59,6 +69,7 @@ void usage(FILE *out) {
         "  paper-uav      helicopter at 58 m over flat ground, fault k(-1,1) (normalized)\n"
         "  mistracking    20 m altitude, tracks jumping by --jump-px\n"
         "  moving-object  20 m altitude, 10%% of landmarks moving at 3 m/s, + mistracking\n"
+        "  euroc-semireal EuRoC IMU + ground truth (--euroc DIR), simulated landmarks (below)\n"
         "Summary scenarios:\n"
         "  paper-uav   Tornqvist et al. 2008 Section IV: helicopter at 58 m, downward\n"
         "              camera, features over 40x40 m; parity test Monte Carlo: P_fa and\n"
@@ -95,6 +106,7 @@ void usage(FILE *out) {
         "Exit: 0 ok, 2 bad usage, 1 internal failure.\n",
         SFD_MAX_FEATURES);
     sfdsim::thesis_loop_help(out);
+    sfdsim::semireal_help(out);
 }
 
 bool parse_int(const char *s, long lo, long hi, long *out) {
@@ -353,7 +365,7 @@ int main(int argc, char **argv) {
                 return 2;
             }
             if (!std::strcmp(a, "--fault-magnitude")) opt.fault_magnitude = x;
-            if (!std::strcmp(a, "--depth-var")) opt.depth_var = x;
+            if (!std::strcmp(a, "--depth-var")) opt.depth_var = opt.semireal_depth_var = x;
             if (!std::strcmp(a, "--pixel-noise")) opt.pixel_noise = x;
         } else if (!std::strcmp(a, "--truth-window") && i + 1 < argc) {
             if (!parse_int(argv[++i], 1, 100, &v)) {
@@ -369,6 +381,34 @@ int main(int argc, char **argv) {
             opt.runs = static_cast<int>(v);
         } else if (!std::strcmp(a, "--quick")) {
             opt.quick = true;
+        } else if (!std::strcmp(a, "--euroc") && i + 1 < argc) {
+            opt.euroc_dir = argv[++i];
+        } else if (!std::strcmp(a, "--config-out") && i + 1 < argc) {
+            opt.config_out = argv[++i];
+        } else if ((!std::strcmp(a, "--camera-hz") || !std::strcmp(a, "--spurious-fraction") ||
+                    !std::strcmp(a, "--pixel-sigma") || !std::strcmp(a, "--track-loss") ||
+                    !std::strcmp(a, "--mover-speed")) &&
+                   i + 1 < argc) {
+            char *end = nullptr;
+            const double x = std::strtod(argv[++i], &end);
+            struct Range {
+                const char *flag;
+                double lo, hi;
+                double *dst;
+            } ranges[] = {{"--camera-hz", 0.1, 200.0, &opt.camera_hz},
+                          {"--spurious-fraction", 0.0, 0.9, &opt.spurious_fraction},
+                          {"--pixel-sigma", 0.0, 100.0, &opt.pixel_sigma},
+                          {"--track-loss", 0.0, 1.0, &opt.track_loss},
+                          {"--mover-speed", 0.0, 100.0, &opt.mover_speed}};
+            for (const Range &r : ranges) {
+                if (std::strcmp(a, r.flag) != 0) continue;
+                if (*end != '\0' || !(x >= r.lo && x <= r.hi)) {
+                    std::fprintf(stderr, "sfd-sim: %s: expected %g..%g, got %s\n", a, r.lo, r.hi,
+                                 argv[i]);
+                    return 2;
+                }
+                *r.dst = x;
+            }
         } else if (!std::strcmp(a, "--csv-dir") && i + 1 < argc) {
             opt.csv_dir = argv[++i];
         } else if (a[0] != '-' && opt.scenario == nullptr) {
@@ -383,6 +423,27 @@ int main(int argc, char **argv) {
         std::fprintf(stderr, "sfd-sim: missing SCENARIO\n");
         usage(stderr);
         return 2;
+    }
+    if (!std::strcmp(opt.scenario, "euroc-semireal")) {
+        if (opt.euroc_dir == nullptr || opt.out_log == nullptr) {
+            std::fprintf(stderr, "sfd-sim: euroc-semireal needs --euroc DIR and -o OUT.lcmlog\n");
+            return 2;
+        }
+        sfdsim::SemirealOptions so;
+        so.euroc_dir = opt.euroc_dir;
+        so.out_path = opt.out_log;
+        so.config_out = opt.config_out ? opt.config_out : "";
+        so.seed = opt.seed;
+        so.features = opt.features > 0 ? opt.features : 200;
+        so.camera_hz = opt.camera_hz;
+        so.spurious_fraction = opt.spurious_fraction;
+        if (opt.pixel_sigma >= 0.0) so.pixel_sigma_px = opt.pixel_sigma;
+        if (opt.semireal_depth_var >= 0.0) so.depth_var_m2 = opt.semireal_depth_var;
+        so.jump_px = opt.jump_px;
+        so.track_loss = opt.track_loss;
+        so.mover_speed_m_s = opt.mover_speed;
+        so.truth_window = opt.truth_window;
+        return sfdsim::write_semireal_log(so);
     }
     if (opt.out_log != nullptr) {
         if (std::strcmp(opt.scenario, "paper-uav") != 0 &&
@@ -443,7 +504,7 @@ int main(int argc, char **argv) {
     }
     std::fprintf(stderr,
                  "sfd-sim: unknown scenario: %s (available: paper-uav, isolation, uav-imu, "
-                 "thesis-loop)\n",
+                 "thesis-loop, euroc-semireal)\n",
                  opt.scenario);
     return 2;
 }

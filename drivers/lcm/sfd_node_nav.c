@@ -50,6 +50,9 @@ sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd
     for (int i = 0; i < SFD_EKF_DIM; ++i) {
         if (!(cfg->p0_diag[i] >= 0.0 && isfinite(cfg->p0_diag[i]))) return SFD_ERR_INVAL;
     }
+    for (int k = 0; k < 3; ++k) {
+        if (!isfinite(cfg->init_accel_bias_m_s2[k])) return SFD_ERR_INVAL;
+    }
     nav->cfg = *cfg;
     nav->params = *params;
     memset(&nav->ekf, 0, sizeof nav->ekf);
@@ -137,12 +140,11 @@ void sfd_nav_truth(sfd_nav_t *nav, int64_t utime, const double p_m[3], const dou
     const double dt = (double)(utime - nav->truth0_utime) * 1e-6;
     double v[3];
     for (int k = 0; k < 3; ++k) v[k] = (p_m[k] - nav->truth0_p[k]) / dt;
-    const double zero[3] = {0, 0, 0};
     double q[4];
     memcpy(q, q_wxyz, sizeof q);
     if (sfd_quat_normalize(q) != SFD_OK ||
-        sfd_ekf_init(&nav->ekf, &nav->cfg.noise, p_m, v, q, nav->params.gyro_bias_rad_s, zero,
-                     nav->cfg.p0_diag) != SFD_OK) {
+        sfd_ekf_init(&nav->ekf, &nav->cfg.noise, p_m, v, q, nav->params.gyro_bias_rad_s,
+                     nav->cfg.init_accel_bias_m_s2, nav->cfg.p0_diag) != SFD_OK) {
         nav->have_truth0 = 0;
         return;
     }

@@ -45,6 +45,9 @@ typedef struct {
     int32_t consider_position;    /**< 1: camera updates do not correct the position (sfd_ekf_t
                                        consider states): self-built landmarks hold no absolute
                                        position information */
+    double init_accel_bias_m_s2[3]; /**< init_from_truth: the accelerometer bias the filter
+                                         starts with (IMU frame, m/s^2; TRUTH carries none);
+                                         the gyro bias is params.gyro_bias_rad_s */
 } sfd_nav_config_t;
 
 /** @brief Defaults: enabled; sfd_ekf_noise_default(); P0 position 1e-6 m^2 (the origin is
@@ -110,7 +113,9 @@ int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
 
 /**
  * @brief A TRUTH pose (init_from_truth only; ignored otherwise or once running): the first one
- *        is kept, the second starts the filter at that pose with the velocity of the difference.
+ *        is kept, the second starts the filter at that pose with the velocity of the difference,
+ *        the gyro bias params.gyro_bias_rad_s and the accelerometer bias
+ *        cfg.init_accel_bias_m_s2.
  */
 void sfd_nav_truth(sfd_nav_t *nav, int64_t utime, const double p_m[3], const double q_wxyz[4]);
 

@@ -1,0 +1,618 @@
+// SPDX-License-Identifier: MIT
+// sfd-sim euroc-semireal: semi-real evaluation log from a EuRoC sequence's IMU and ground truth
+// (no images): real motion, real gyro and accelerometer errors, simulated landmarks.
+//
+// Inputs (EuRoC folder layout, Burri et al., IJRR 2016):
+//  - mav0/imu0/data.csv: timestamp [ns], w_RS_S (rad/s), a_RS_S (m/s^2), IMU frame;
+//  - mav0/state_groundtruth_estimate0/data.csv: timestamp [ns], p_RS_R (m), q_RS (w x y z),
+//    v_RS_R (m/s), b_w (rad/s), b_a (m/s^2): the IMU (S) pose in the world (R, z up);
+//  - mav0/cam0/sensor.yaml: T_BS (cam0 pose in the body = IMU frame), intrinsics fu fv cu cv,
+//    radial-tangential distortion, resolution.
+// Both CSVs' timestamps are on the same clock; the log covers their overlap only.
+//
+// The log (channels as sfd-sim's other scenarios, apps/sim/flight_log.cpp):
+//  - IMU: every imu0 row inside the overlap, unchanged (utime = t_ns / 1000, floor);
+//  - FEATURES at camera_hz from the overlap's start; TRUTH at the same times: the ground-truth IMU
+//    pose interpolated there (sfd_gt_interpolate: slerp, linear position), the TRUTH frame
+//    convention (IMU position and orientation in the world);
+//  - CAMERA_INFO first and once per second: cam0's calibration and T_BS.
+// Landmarks: the walls, floor and ceiling of a room around the flight (the ground truth's
+// bounding box over the overlap grown by 2 m horizontally, floor z = 0 or below the lowest
+// point, ceiling 4 m or above the highest): a new track casts a random pixel of the current view
+// onto the room. A fixed number of tracks (features) stays in view: a track whose point leaves the
+// image, or that the tracker loses (probability track_loss per frame), is replaced by a new one
+// (new track id). Pixels: the landmark projected through the ground-truth camera pose (T_BS
+// composed with the interpolated IMU pose) and cam0's distortion, plus N(0, pixel_sigma^2) per
+// axis. Depth priors: the true depth plus N(0, depth_var).
+// Spurious features (TRUTH spurious = 1), each kind a third of spurious_fraction:
+//  - moving object: a group of tracks (a third of spurious_fraction of the slots) whose points
+//    move together at mover_speed in one horizontal direction, drawn anew every 2 s; spurious in
+//    every frame;
+//  - mistracked: a jump of jump_px in a random direction, or a drift of drift_px per frame for
+//    drift_frames frames; the track keeps the offset (it follows the wrong point);
+//  - mismatched: the track's id jumps to another point of the room, 15-60 px away in the image.
+// A step (jump, drift step, mismatch) labels the track spurious in the truth_window frames from
+// the step: the windows of a detector with L = truth_window + 1 frames that mix observations from
+// before and after it (as apps/sim/flight_log.cpp labels its mistracks).
+#include "euroc_semireal.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <cinttypes>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "lcm_log.hpp"
+#include "sfd/sfd.h"
+#include "sfd_feature_frame_t.h"
+#include "sfd_gt_traj.h"
+#include "sfd_imu_t.h"
+#include "sfd_truth_t.h"
+
+namespace sfdsim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct ImuRow {
+    int64_t t_ns;
+    double w[3];  // rad/s
+    double a[3];  // m/s^2
+};
+
+struct GtRow {
+    sfd_gt_pose_t pose;
+    double v[3];   // m/s
+    double bw[3];  // rad/s
+    double ba[3];  // m/s^2
+    long line;     // line in the CSV (error messages)
+};
+
+std::string trim(const std::string &s) {
+    size_t b = 0, e = s.size();
+    while (b < e && (s[b] == ' ' || s[b] == '\t' || s[b] == '\r')) ++b;
+    while (e > b && (s[e - 1] == ' ' || s[e - 1] == '\t' || s[e - 1] == '\r')) --e;
+    return s.substr(b, e - b);
+}
+
+// Reads a numeric CSV: comment lines (#) and blank lines skipped; every other line must hold
+// exactly `cols` comma-separated fields, the first an integer timestamp (ns, >= 0, strictly
+// increasing), the rest finite numbers. ts, rows and lines (1-based line numbers) receive one
+// entry per data line.
+bool read_csv(const std::string &path, size_t cols, std::vector<int64_t> *ts,
+              std::vector<std::vector<double>> *rows, std::vector<long> *lines, std::string *err) {
+    std::ifstream f(path);
+    if (!f) {
+        *err = path + ": cannot open";
+        return false;
+    }
+    std::string line;
+    long line_no = 0;
+    while (std::getline(f, line)) {
+        ++line_no;
+        const std::string t = trim(line);
+        if (t.empty() || t[0] == '#') continue;
+        std::vector<std::string> fields;
+        size_t start = 0;
+        for (;;) {
+            const size_t comma = t.find(',', start);
+            fields.push_back(trim(
+                t.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
+            if (comma == std::string::npos) break;
+            start = comma + 1;
+        }
+        const std::string where = path + ":" + std::to_string(line_no);
+        if (fields.size() != cols) {
+            *err = where + ": expected " + std::to_string(cols) + " comma-separated fields, got " +
+                   std::to_string(fields.size());
+            return false;
+        }
+        char *end = nullptr;
+        errno = 0;
+        const long long stamp = std::strtoll(fields[0].c_str(), &end, 10);
+        if (fields[0].empty() || *end != '\0' || errno != 0 || stamp < 0) {
+            *err = where + ": field 1: not a timestamp in ns (a non-negative integer): '" +
+                   fields[0] + "'";
+            return false;
+        }
+        if (!ts->empty() && stamp <= ts->back()) {
+            *err = where + ": timestamp " + fields[0] + " is not after the previous row's";
+            return false;
+        }
+        std::vector<double> v(cols - 1);
+        for (size_t k = 1; k < cols; ++k) {
+            end = nullptr;
+            const double x = std::strtod(fields[k].c_str(), &end);
+            if (fields[k].empty() || *end != '\0' || !std::isfinite(x)) {
+                *err = where + ": field " + std::to_string(k + 1) + ": not a finite number: '" +
+                       fields[k] + "'";
+                return false;
+            }
+            v[k - 1] = x;
+        }
+        ts->push_back(stamp);
+        rows->push_back(std::move(v));
+        lines->push_back(line_no);
+    }
+    if (ts->empty()) {
+        *err = path + ": no data rows";
+        return false;
+    }
+    return true;
+}
+
+bool read_imu(const std::string &path, std::vector<ImuRow> *out, std::string *err) {
+    std::vector<int64_t> ts;
+    std::vector<std::vector<double>> rows;
+    std::vector<long> lines;
+    if (!read_csv(path, 7, &ts, &rows, &lines, err)) return false;
+    out->resize(ts.size());
+    for (size_t i = 0; i < ts.size(); ++i) {
+        (*out)[i].t_ns = ts[i];
+        for (size_t k = 0; k < 3; ++k) {
+            (*out)[i].w[k] = rows[i][k];
+            (*out)[i].a[k] = rows[i][3 + k];
+        }
+    }
+    return true;
+}
+
+bool read_gt(const std::string &path, std::vector<GtRow> *out, std::string *err) {
+    std::vector<int64_t> ts;
+    std::vector<std::vector<double>> rows;
+    std::vector<long> lines;
+    if (!read_csv(path, 17, &ts, &rows, &lines, err)) return false;
+    out->resize(ts.size());
+    for (size_t i = 0; i < ts.size(); ++i) {
+        GtRow &g = (*out)[i];
+        const std::vector<double> &r = rows[i];
+        g.pose.t_ns = ts[i];
+        g.line = lines[i];
+        for (size_t k = 0; k < 3; ++k) {
+            g.pose.p_IinW_m[k] = r[k];
+            g.v[k] = r[7 + k];
+            g.bw[k] = r[10 + k];
+            g.ba[k] = r[13 + k];
+        }
+        for (size_t k = 0; k < 4; ++k) g.pose.q_ItoW[k] = r[3 + k];
+        const double n =
+            std::sqrt(g.pose.q_ItoW[0] * g.pose.q_ItoW[0] + g.pose.q_ItoW[1] * g.pose.q_ItoW[1] +
+                      g.pose.q_ItoW[2] * g.pose.q_ItoW[2] + g.pose.q_ItoW[3] * g.pose.q_ItoW[3]);
+        // EuRoC prints the quaternion to 6 decimals: its norm is 1 within about 1e-5.
+        if (!(std::fabs(n - 1.0) < 1e-3) || sfd_quat_normalize(g.pose.q_ItoW) != SFD_OK) {
+            *err = path + ":" + std::to_string(lines[i]) +
+                   ": q_RS (fields 5-8) is not a unit quaternion (norm " + std::to_string(n) + ")";
+            return false;
+        }
+    }
+    return true;
+}
+
+bool read_numbers(const cv::FileNode &n, const std::string &where, size_t count, double *out,
+                  std::string *err) {
+    if (!n.isSeq() || n.size() != count) {
+        *err = where + ": expected a list of " + std::to_string(count) + " numbers";
+        return false;
+    }
+    for (size_t k = 0; k < count; ++k) {
+        const cv::FileNode e = n[int(k)];
+        if (!e.isReal() && !e.isInt()) {
+            *err = where + ": element " + std::to_string(k + 1) + " is not a number";
+            return false;
+        }
+        out[k] = static_cast<double>(e);
+    }
+    return true;
+}
+
+// cam0/sensor.yaml (Kalibr / EuRoC): T_BS.data (row-major 4x4), resolution, camera_model
+// pinhole, intrinsics [fu fv cu cv], distortion_model radial-tangential or equidistant,
+// distortion_coefficients (4).
+bool read_sensor_yaml(const std::string &path, sfd_camera_t *cam, double T_BS[16],
+                      std::string *err) {
+    cv::FileStorage fs;
+    try {
+        if (!fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML)) {
+            *err = path + ": cannot open";
+            return false;
+        }
+        const cv::FileNode root = fs.root();
+        double res[2], intr[4], dist[4];
+        if (!read_numbers(root["T_BS"]["data"], path + ": T_BS.data", 16, T_BS, err) ||
+            !read_numbers(root["resolution"], path + ": resolution", 2, res, err) ||
+            !read_numbers(root["intrinsics"], path + ": intrinsics", 4, intr, err) ||
+            !read_numbers(root["distortion_coefficients"], path + ": distortion_coefficients", 4,
+                          dist, err)) {
+            return false;
+        }
+        const cv::FileNode cm = root["camera_model"], dm = root["distortion_model"];
+        if (!cm.isString() || static_cast<std::string>(cm) != "pinhole") {
+            *err = path + ": camera_model: expected \"pinhole\"";
+            return false;
+        }
+        const std::string dms = dm.isString() ? static_cast<std::string>(dm) : std::string();
+        int model = -1;
+        if (dms == "radial-tangential" || dms == "radtan") model = SFD_DISTORTION_RADTAN;
+        if (dms == "equidistant") model = SFD_DISTORTION_EQUIDISTANT;
+        if (model < 0) {
+            *err = path + ": distortion_model: expected radial-tangential or equidistant, got '" +
+                   dms + "'";
+            return false;
+        }
+        if (sfd_camera_init(cam, model, int(res[0]), int(res[1]), intr[0], intr[1], intr[2],
+                            intr[3], dist) != SFD_OK) {
+            *err = path +
+                   ": intrinsics/resolution/distortion_coefficients rejected by the "
+                   "camera model (non-positive focal length or size?)";
+            return false;
+        }
+    } catch (const cv::Exception &e) {
+        *err = path + ": not valid YAML (" + e.msg + ")";
+        return false;
+    }
+    return true;
+}
+
+struct Track {
+    int64_t id = 0;
+    double p_W[3] = {0, 0, 0};  // the point the track follows (m, world)
+    double off_px[2] = {0, 0};  // accumulated mistrack offset
+    double drift_px[2] = {0, 0};
+    int drift_left = 0;
+    int64_t last_step = INT32_MIN;  // frame of the last jump/drift step/mismatch
+    bool alive = false;
+    bool mover = false;
+};
+
+}  // namespace
+
+void semireal_help(FILE *out) {
+    std::fprintf(
+        out,
+        "euroc-semireal (log scenario, needs --euroc DIR and -o): EuRoC IMU + ground truth\n"
+        "  (no images): the real imu0 samples and the ground-truth motion over their overlap,\n"
+        "  landmarks on the walls/floor/ceiling of a room around the flight projected through\n"
+        "  cam0 (T_BS, intrinsics, distortion of mav0/cam0/sensor.yaml), spurious features\n"
+        "  (moving group, mistracks, mismatches) labelled in TRUTH. See apps/sim/SEMIREAL.md.\n"
+        "  --euroc DIR            folder with mav0/ (imu0, state_groundtruth_estimate0, cam0)\n"
+        "  --features N           tracks kept in view (200)\n"
+        "  --camera-hz F          camera rate (20 Hz)\n"
+        "  --spurious-fraction R  target fraction of spurious features, a third per kind (0.1)\n"
+        "  --pixel-sigma S        pixel noise per axis (0.5 px)\n"
+        "  --depth-var V          depth prior variance (0.01 m^2)\n"
+        "  --jump-px P            mistrack jump (8 px)\n"
+        "  --track-loss P         probability per frame that a track ends (0.02)\n"
+        "  --mover-speed V        speed of the moving group (0.5 m/s)\n"
+        "  --truth-window W       frames a step is labelled spurious, L - 1 (2)\n"
+        "  --config-out F         also write an sfd-replay configuration for the log:\n"
+        "                         filter.init_from_truth 1, the ground truth's gyro and\n"
+        "                         accelerometer biases at the start, pixel_sigma_px S\n");
+}
+
+int write_semireal_log(const SemirealOptions &opt) {
+    std::string mav = opt.euroc_dir;
+    while (mav.size() > 1 && mav.back() == '/') mav.pop_back();
+    {
+        std::ifstream probe(mav + "/mav0/imu0/data.csv");
+        if (probe) mav += "/mav0";
+    }
+    const std::string imu_path = mav + "/imu0/data.csv";
+    const std::string gt_path = mav + "/state_groundtruth_estimate0/data.csv";
+    const std::string cam_path = mav + "/cam0/sensor.yaml";
+    std::vector<ImuRow> imu;
+    std::vector<GtRow> gt;
+    sfd_camera_t cam;
+    double T_BS[16];
+    std::string err;
+    if (!read_imu(imu_path, &imu, &err) || !read_gt(gt_path, &gt, &err) ||
+        !read_sensor_yaml(cam_path, &cam, T_BS, &err)) {
+        std::fprintf(stderr, "sfd-sim: %s\n", err.c_str());
+        return 2;
+    }
+    sfd_extrinsics_t ext;
+    if (sfd_extrinsics_from_matrix(&ext, T_BS) != SFD_OK) {
+        std::fprintf(stderr,
+                     "sfd-sim: %s: T_BS: not a rigid transform (rotation block not "
+                     "orthonormal within 1e-6, or last row not 0 0 0 1)\n",
+                     cam_path.c_str());
+        return 2;
+    }
+    // The overlap of IMU and ground truth (same clock): the log covers it only.
+    const int64_t t_begin = std::max(imu.front().t_ns, gt.front().pose.t_ns);
+    const int64_t t_end = std::min(imu.back().t_ns, gt.back().pose.t_ns);
+    const int64_t period_ns = std::llround(1e9 / opt.camera_hz);
+    if (t_end - t_begin < period_ns) {
+        std::fprintf(stderr,
+                     "sfd-sim: %s and %s overlap for less than one camera period "
+                     "(IMU %" PRId64 "..%" PRId64 " ns, ground truth %" PRId64 "..%" PRId64
+                     " ns)\n",
+                     imu_path.c_str(), gt_path.c_str(), imu.front().t_ns, imu.back().t_ns,
+                     gt.front().pose.t_ns, gt.back().pose.t_ns);
+        return 2;
+    }
+    // Ground-truth gaps: interpolating over more than 0.2 s would invent motion.
+    const int64_t max_gap_ns = 200000000;
+    size_t g_first = 0;
+    while (gt[g_first + 1].pose.t_ns <= t_begin && g_first + 2 < gt.size()) ++g_first;
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (size_t i = g_first; i < gt.size() && gt[i].pose.t_ns <= t_end + max_gap_ns; ++i) {
+        if (i + 1 < gt.size() && gt[i].pose.t_ns < t_end &&
+            gt[i + 1].pose.t_ns - gt[i].pose.t_ns > max_gap_ns) {
+            std::fprintf(stderr,
+                         "sfd-sim: %s:%ld-%ld: ground-truth gap of %.3f s inside the IMU "
+                         "overlap (more than 0.2 s cannot be interpolated)\n",
+                         gt_path.c_str(), gt[i].line, gt[i + 1].line,
+                         double(gt[i + 1].pose.t_ns - gt[i].pose.t_ns) * 1e-9);
+            return 2;
+        }
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], gt[i].pose.p_IinW_m[k]);
+            hi[k] = std::max(hi[k], gt[i].pose.p_IinW_m[k]);
+        }
+    }
+    // The room: the flight's bounding box grown by 2 m horizontally; floor and ceiling.
+    const double room_lo[3] = {lo[0] - 2.0, lo[1] - 2.0, std::min(0.0, lo[2] - 0.5)};
+    const double room_hi[3] = {hi[0] + 2.0, hi[1] + 2.0, std::max(4.0, hi[2] + 1.0)};
+
+    LogWriter log(opt.out_path);
+    if (!log.ok()) {
+        std::fprintf(stderr, "sfd-sim: -o: cannot write %s\n", opt.out_path.c_str());
+        return 2;
+    }
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, opt.seed);
+    std::vector<uint8_t> buf(size_t{64} * 1024);
+    sfd_camera_info_t ci = camera_info_of(cam, T_BS);
+    const int n_feat = std::min(opt.features, SFD_FEATURE_FRAME_T_CAPACITY);
+    const int n_move =
+        std::min(n_feat, int(std::lround(opt.spurious_fraction / 3.0 * double(n_feat))));
+    // Events per frame per non-moving track, two thirds of the spurious fraction together: a jump
+    // or a mismatch labels truth_window frames, a drift drift_frames + truth_window - 1; the
+    // three kinds are equally likely.
+    const double frames_per_event = (3.0 * opt.truth_window + opt.drift_frames - 1.0) / 3.0;
+    const double p_event = (2.0 / 3.0) * opt.spurious_fraction /
+                           (frames_per_event * std::max(0.05, 1.0 - opt.spurious_fraction / 3.0));
+    std::vector<Track> tracks(static_cast<size_t>(n_feat));
+    for (int i = 0; i < n_move; ++i) tracks[size_t(i)].mover = true;
+    int64_t next_id = 1;
+    const double margin_px = 10.0;
+
+    // A point of the room seen at pixel uv by the camera (R_CtoW, p_C); false if none.
+    auto cast = [&](const double uv[2], const double R[9], const double p[3], double out[3]) {
+        double ray[3], d[3];
+        if (sfd_camera_unproject(&cam, uv, ray) != SFD_OK) return false;
+        for (int r = 0; r < 3; ++r) {
+            d[r] = 0;
+            for (int k = 0; k < 3; ++k) d[r] += R[3 * r + k] * ray[k];
+        }
+        return sfd_gt_room_hit(room_lo, room_hi, p, d, out) == 0;
+    };
+    auto spawn = [&](Track &T, const double R[9], const double p[3]) {
+        T.alive = false;
+        for (int tries = 0; tries < 32 && !T.alive; ++tries) {
+            const double uv[2] = {
+                margin_px + (cam.width_px - 2 * margin_px) * sfd_prng_uniform(&rng),
+                margin_px + (cam.height_px - 2 * margin_px) * sfd_prng_uniform(&rng)};
+            T.alive = cast(uv, R, p, T.p_W);
+        }
+        T.id = next_id++;
+        T.off_px[0] = T.off_px[1] = 0.0;
+        T.drift_px[0] = T.drift_px[1] = 0.0;
+        T.drift_left = 0;
+        T.last_step = INT32_MIN;
+    };
+
+    static sfd_feature_frame_t ff;
+    static sfd_truth_t tr;
+    size_t imu_i = 0;
+    while (imu_i < imu.size() && imu[imu_i].t_ns < t_begin) ++imu_i;
+    int64_t imu_written = 0;
+    auto write_imu_until = [&](int64_t t_ns) {
+        for (; imu_i < imu.size() && imu[imu_i].t_ns <= t_ns; ++imu_i) {
+            sfd_imu_t m;
+            m.utime = imu[imu_i].t_ns / 1000;
+            for (int k = 0; k < 3; ++k) {
+                m.gyro[k] = imu[imu_i].w[k];
+                m.accel[k] = imu[imu_i].a[k];
+            }
+            log.write("IMU", m.utime, buf, sfd_imu_t_encode(buf.data(), 0, int(buf.size()), &m));
+            ++imu_written;
+        }
+    };
+    size_t g = g_first;
+    const int frames = int((t_end - t_begin) / period_ns) + 1;
+    const int info_every = std::max(1, int(std::lround(opt.camera_hz)));
+    long n_total = 0, n_mover = 0, n_mistrack = 0, n_mismatch_events = 0, n_spurious = 0,
+         n_dropped = 0;
+    double mover_v[3] = {0, 0, 0};
+    int mover_epoch = -1;
+    sfd_gt_pose_t first_pose{};
+    for (int f = 0; f < frames; ++f) {
+        const int64_t t_ns = t_begin + int64_t(f) * period_ns;
+        const int64_t utime = t_ns / 1000;
+        write_imu_until(t_ns);
+        while (g + 2 < gt.size() && gt[g + 1].pose.t_ns < t_ns) ++g;
+        sfd_gt_pose_t P;
+        double R[9], pc[3];
+        if (sfd_gt_interpolate(&gt[g].pose, &gt[g + 1].pose, t_ns, &P) != 0 ||
+            sfd_gt_camera_pose(&P, &ext, R, pc) != 0) {
+            std::fprintf(stderr, "sfd-sim: %s: cannot interpolate the pose at %" PRId64 " ns\n",
+                         gt_path.c_str(), t_ns);
+            return 2;
+        }
+        if (f == 0) first_pose = P;
+        if (f % info_every == 0) {
+            ci.utime = utime;
+            log.write("CAMERA_INFO", utime, buf,
+                      sfd_camera_info_t_encode(buf.data(), 0, int(buf.size()), &ci));
+        }
+        // The moving group's velocity: a new horizontal direction every 2 s.
+        const int epoch = int(double(t_ns - t_begin) * 1e-9 / 2.0);
+        if (epoch != mover_epoch) {
+            mover_epoch = epoch;
+            const double heading = 2.0 * kPi * sfd_prng_uniform(&rng);
+            mover_v[0] = opt.mover_speed_m_s * std::cos(heading);
+            mover_v[1] = opt.mover_speed_m_s * std::sin(heading);
+        }
+        const double dt = double(period_ns) * 1e-9;
+        std::memset(&ff, 0, sizeof ff);
+        std::memset(&tr, 0, sizeof tr);
+        ff.utime = utime;
+        ff.camera_id = 0;
+        tr.utime = utime;
+        std::memcpy(tr.position, P.p_IinW_m, sizeof tr.position);
+        std::memcpy(tr.orientation, P.q_ItoW, sizeof tr.orientation);
+        int k = 0;
+        for (Track &T : tracks) {
+            // Draws in a fixed order per track and frame (determinism).
+            const double u_loss = sfd_prng_uniform(&rng);
+            const double u_event = sfd_prng_uniform(&rng);
+            const double u_kind = sfd_prng_uniform(&rng);
+            const double u_dir = sfd_prng_uniform(&rng);
+            const double u_r = sfd_prng_uniform(&rng);
+            const double n_u = sfd_prng_gaussian(&rng), n_v = sfd_prng_gaussian(&rng);
+            const double n_d = sfd_prng_gaussian(&rng);
+            bool fresh = false;
+            if (!T.alive || (f > 0 && u_loss < opt.track_loss)) {
+                spawn(T, R, pc);
+                fresh = true;
+            }
+            if (!T.alive) {
+                ++n_dropped;
+                continue;
+            }
+            if (T.mover && f > 0) {
+                for (int a = 0; a < 3; ++a) T.p_W[a] += mover_v[a] * dt;
+            }
+            double uv[2], depth = 0.0;
+            bool vis = sfd_gt_project(&cam, R, pc, T.p_W, uv, &depth) != 0;
+            const double ang = 2.0 * kPi * u_dir;
+            if (vis && !fresh && !T.mover && u_event < p_event) {
+                if (u_kind < 1.0 / 3.0) {  // jump
+                    T.off_px[0] += opt.jump_px * std::cos(ang);
+                    T.off_px[1] += opt.jump_px * std::sin(ang);
+                    T.last_step = f;
+                    ++n_mistrack;
+                } else if (u_kind < 2.0 / 3.0) {  // drift, from this frame on
+                    T.drift_px[0] = opt.drift_px * std::cos(ang);
+                    T.drift_px[1] = opt.drift_px * std::sin(ang);
+                    T.drift_left = opt.drift_frames;
+                    ++n_mistrack;
+                } else {  // mismatch: another point 15-60 px away
+                    const double r = 15.0 + 45.0 * u_r;
+                    for (int side = 0; side < 2; ++side) {
+                        const double s = side ? -1.0 : 1.0;
+                        const double uv2[2] = {uv[0] + s * r * std::cos(ang),
+                                               uv[1] + s * r * std::sin(ang)};
+                        double p2[3];
+                        if (uv2[0] < margin_px || uv2[0] > cam.width_px - margin_px ||
+                            uv2[1] < margin_px || uv2[1] > cam.height_px - margin_px ||
+                            !cast(uv2, R, pc, p2)) {
+                            continue;
+                        }
+                        std::memcpy(T.p_W, p2, sizeof p2);
+                        T.last_step = f;
+                        ++n_mismatch_events;
+                        break;
+                    }
+                    vis = sfd_gt_project(&cam, R, pc, T.p_W, uv, &depth) != 0;
+                }
+            }
+            if (T.drift_left > 0) {
+                T.off_px[0] += T.drift_px[0];
+                T.off_px[1] += T.drift_px[1];
+                T.drift_left--;
+                T.last_step = f;
+            }
+            double u = uv[0] + T.off_px[0], v = uv[1] + T.off_px[1];
+            if (!vis || u < 0 || u >= cam.width_px || v < 0 || v >= cam.height_px) {
+                // Out of view: a new track takes the slot (no event on it this frame).
+                spawn(T, R, pc);
+                if (!T.alive || !sfd_gt_project(&cam, R, pc, T.p_W, uv, &depth)) {
+                    ++n_dropped;
+                    continue;
+                }
+                u = uv[0];
+                v = uv[1];
+            }
+            ff.track_id[k] = T.id;
+            ff.u[k] = u + opt.pixel_sigma_px * n_u;
+            ff.v[k] = v + opt.pixel_sigma_px * n_v;
+            const double zhat = depth + std::sqrt(opt.depth_var_m2) * n_d;
+            ff.depth[k] = zhat > 0.1 ? zhat : 0.1;
+            ff.depth_var[k] = opt.depth_var_m2;
+            const bool spurious = T.mover || (f - T.last_step < opt.truth_window);
+            tr.track_id[k] = T.id;
+            tr.spurious[k] = spurious ? 1 : 0;
+            n_spurious += spurious;
+            n_mover += T.mover;
+            ++n_total;
+            ++k;
+        }
+        ff.num_features = k;
+        tr.num_features = k;
+        log.write("FEATURES", utime, buf,
+                  sfd_feature_frame_t_encode(buf.data(), 0, int(buf.size()), &ff));
+        log.write("TRUTH", utime, buf, sfd_truth_t_encode(buf.data(), 0, int(buf.size()), &tr));
+    }
+    write_imu_until(t_end);
+    if (!log.ok()) {
+        std::fprintf(stderr, "sfd-sim: writing %s failed\n", opt.out_path.c_str());
+        return 1;
+    }
+    const GtRow &g0 = gt[g_first];
+    if (!opt.config_out.empty()) {
+        FILE *c = std::fopen(opt.config_out.c_str(), "w");
+        if (c == nullptr) {
+            std::fprintf(stderr, "sfd-sim: --config-out: cannot write %s\n",
+                         opt.config_out.c_str());
+            return 2;
+        }
+        std::fprintf(c,
+                     "%%YAML:1.0\n---\n"
+                     "# sfd-replay configuration for %s (written by sfd-sim euroc-semireal).\n"
+                     "# The simulated pixel noise.\n"
+                     "pixel_sigma_px: %.17g\n"
+                     "# The ground truth's gyro bias estimate (b_w) at the log's start: the\n"
+                     "# filter's initial gyro bias when it starts from TRUTH.\n"
+                     "gyro_bias_rad_s: [ %.17g, %.17g, %.17g ]\n"
+                     "filter:\n"
+                     "   # The filter starts from the first two TRUTH poses (evaluation only).\n"
+                     "   init_from_truth: 1\n"
+                     "   # The ground truth's accelerometer bias estimate (b_a) at the start.\n"
+                     "   init_accel_bias_m_s2: [ %.17g, %.17g, %.17g ]\n",
+                     opt.out_path.c_str(), opt.pixel_sigma_px, g0.bw[0], g0.bw[1], g0.bw[2],
+                     g0.ba[0], g0.ba[1], g0.ba[2]);
+        if (std::fclose(c) != 0) {
+            std::fprintf(stderr, "sfd-sim: --config-out: writing %s failed\n",
+                         opt.config_out.c_str());
+            return 1;
+        }
+    }
+    std::printf(
+        "sfd-sim euroc-semireal: wrote %s: %d frames at %g Hz over %.3f s (IMU/ground-truth "
+        "overlap %" PRId64 "..%" PRId64
+        " ns), %lld IMU samples, %.1f features per frame, "
+        "%.2f%% spurious (moving group %.2f%%, %ld mistracks, %ld mismatches), %ld slots left "
+        "empty (seed %llu)\n",
+        opt.out_path.c_str(), frames, opt.camera_hz, double(t_end - t_begin) * 1e-9, t_begin, t_end,
+        static_cast<long long>(imu_written), double(n_total) / frames,
+        100.0 * double(n_spurious) / double(n_total ? n_total : 1),
+        100.0 * double(n_mover) / double(n_total ? n_total : 1), n_mistrack, n_mismatch_events,
+        n_dropped, static_cast<unsigned long long>(opt.seed));
+    std::printf(
+        "  room x %.2f..%.2f y %.2f..%.2f z %.2f..%.2f m; start p %.3f %.3f %.3f m; "
+        "ground-truth b_w %.6f %.6f %.6f rad/s, b_a %.6f %.6f %.6f m/s^2\n",
+        room_lo[0], room_hi[0], room_lo[1], room_hi[1], room_lo[2], room_hi[2],
+        first_pose.p_IinW_m[0], first_pose.p_IinW_m[1], first_pose.p_IinW_m[2], g0.bw[0], g0.bw[1],
+        g0.bw[2], g0.ba[0], g0.ba[1], g0.ba[2]);
+    return 0;
+}
+
+}  // namespace sfdsim
