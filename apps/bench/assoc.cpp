@@ -156,7 +156,7 @@ int bench_assoc(int argc, char **argv) {
     uint64_t seed = 1;
     const char *csv = nullptr;
     bool quick = false;
-    bool worst = false;  // SFD_MAX_FEATURES matches, all outliers
+    bool worst = false;     // SFD_MAX_FEATURES matches, all outliers
     bool sfd_only = false;  // skip OpenCV (profiling sfd under callgrind)
     std::string only;       // keep the methods whose name contains this
     for (int i = 2; i < argc; ++i) {
@@ -283,7 +283,8 @@ int bench_assoc(int argc, char **argv) {
                             x.hyp_text().c_str());
                         if (fc != nullptr) {
                             std::fprintf(
-                                fc, "%d,%.2f,%.2f,%s,%s,%.3f,%.3f,%.3f,%.5f,%.5f,%.5f,%.0f,%.0f,%ld\n",
+                                fc,
+                                "%d,%.2f,%.2f,%s,%s,%.3f,%.3f,%.3f,%.5f,%.5f,%.5f,%.0f,%.0f,%ld\n",
                                 N, ratio, sigma, kind, methods[k].name.c_str(), x.pct(0.5),
                                 x.pct(0.99), x.pct_total(0.5), x.precision(), x.recall(), x.f1(),
                                 Stats::pct_of(x.hyps, 0.5), Stats::pct_of(x.hyps, 1.0),

@@ -112,18 +112,18 @@ Gate gate_of(Score score, const sfd_assoc_t &a, double sigma2, double noise_px2)
 }
 
 /// Counts the inliers of one OPRF hypothesis among the packed valid matches: the Sampson distance
-/// of eq. (25) in px^2 is at most @p thr_px2. It is evaluated in normalized coordinates x~ = K^-1 x,
-/// where F = K^-T E K^-1 gives the same residual e = x~_prev^T E x~_curr and the pixel Sampson
-/// denominator |(F x_curr)_12|^2 + |(F^T x_prev)_12|^2 = (g0^2 + h0^2) / fx^2 + (g1^2 + h1^2) / fy^2
-/// with g = E x~_curr, h = E^T x~_prev; the test e^2 <= thr (...) needs no division and, E being
-/// scaled to unit largest entry, is well conditioned in single precision. Blocks of
+/// of eq. (25) in px^2 is at most @p thr_px2. It is evaluated in normalized coordinates x~ = K^-1
+/// x, where F = K^-T E K^-1 gives the same residual e = x~_prev^T E x~_curr and the pixel Sampson
+/// denominator |(F x_curr)_12|^2 + |(F^T x_prev)_12|^2 = (g0^2 + h0^2) / fx^2 + (g1^2 + h1^2) /
+/// fy^2 with g = E x~_curr, h = E^T x~_prev; the test e^2 <= thr (...) needs no division and, E
+/// being scaled to unit largest entry, is well conditioned in single precision. Blocks of
 /// SFD_ASSOC_SCORE_BLOCK matches are scored together (vectorizable; the NaN padding is never an
 /// inlier). Stops early, returning a count below @p need, once even all remaining matches could not
 /// reach @p need: only a hypothesis with more inliers than the best so far matters. Single
 /// precision only ranks the hypotheses: the verdicts of the chosen one are computed in double
 /// precision with sampson_px2().
-int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], float thr_u, float thr_v, int32_t nv,
-                             int32_t need) {
+int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], float thr_u, float thr_v,
+                             int32_t nv, int32_t need) {
     constexpr int32_t kBlock = SFD_ASSOC_SCORE_BLOCK;
     const float e0 = E[0], e1 = E[1], e2 = E[2], e3 = E[3], e4 = E[4], e5 = E[5], e6 = E[6],
                 e7 = E[7], e8 = E[8];
@@ -143,7 +143,8 @@ int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], float thr_u
             const float h1 = e1 * u1[j] + e4 * v1[j] + e7;
             const float e = u1[j] * g0 + v1[j] * g1 + g2;
             const float rhs = thr_u * (g0 * g0 + h0 * h0) + thr_v * (g1 * g1 + h1 * h1);
-            const int32_t in = static_cast<int32_t>(e * e <= rhs) & static_cast<int32_t>(rhs > 0.0F);
+            const int32_t in =
+                static_cast<int32_t>(e * e <= rhs) & static_cast<int32_t>(rhs > 0.0F);
             block_count += in;
         }
         count += block_count;

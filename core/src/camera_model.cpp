@@ -201,7 +201,8 @@ Mat2 inverse2(const Mat2 &J) {
 
 /// A Newton step at the rounding level of double precision at @p x: |step| <= 4 eps max(1, |x|).
 bool converged_step(double step, double x) {
-    return std::fabs(step) <= 4.0 * std::numeric_limits<double>::epsilon() * std::fmax(1.0, std::fabs(x));
+    return std::fabs(step) <=
+           4.0 * std::numeric_limits<double>::epsilon() * std::fmax(1.0, std::fabs(x));
 }
 
 /// Pinhole / radtan inversion: Newton's method on F(xn) = d(xn) - d_target,

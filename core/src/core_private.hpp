@@ -44,8 +44,8 @@ inline bool all_finite(const double *v, std::size_t n) {
 /// True when each of the @p N doubles stored from @p p on (an object representation, e.g. a
 /// struct of doubles; N even) is finite. An exponent field of all ones (Inf, NaN) carries into
 /// bit 63 when one unit of the exponent is added to it; no other exponent does. Two doubles per
-/// step in GCC's generic vectors (SSE2 / NEON where present, plain integers elsewhere): branch-free,
-/// unlike N calls of std::isfinite.
+/// step in GCC's generic vectors (SSE2 / NEON where present, plain integers elsewhere):
+/// branch-free, unlike N calls of std::isfinite.
 template <std::size_t N>
 inline bool all_finite_repr(const void *p) {
     static_assert(N % 2 == 0, "pairs of doubles");

@@ -322,10 +322,10 @@ struct Transition {
 /// Y = F X for a 15x15 X (row-major; read transposed when @p transposed), over F's nonzero
 /// blocks: 810 multiplications instead of the dense 3375.
 void left_multiply(const Transition &F, const double *X, bool transposed, double Y[N][N]) {
-    constexpr int P = SFD_EKF_IDX_P, V = SFD_EKF_IDX_V, TH = SFD_EKF_IDX_THETA,
-                  BG = SFD_EKF_IDX_BG, BA = SFD_EKF_IDX_BA;
+    constexpr int P = SFD_EKF_IDX_P, V = SFD_EKF_IDX_V, TH = SFD_EKF_IDX_THETA, BG = SFD_EKF_IDX_BG,
+                  BA = SFD_EKF_IDX_BA;
     for (int j = 0; j < N; ++j) {
-        double x[N];
+        double x[N] = {};
         for (int k = 0; k < N; ++k) x[k] = transposed ? X[N * j + k] : X[N * k + j];
         for (int r = 0; r < 3; ++r) {
             double yp = x[P + r] + F.dt * x[V + r];

@@ -14,7 +14,7 @@
  * combined pipeline (parity window, EKF, association workspace and result, landmark map). */
 #define SFD_STATE_TOTAL                                                     \
     (sizeof(sfd_parity_t) + sizeof(sfd_extrinsics_t) + sizeof(sfd_prng_t) + \
-     sizeof(sfd_landmark_map_t) + sizeof(sfd_ekf_t) + sizeof(sfd_assoc_t) +  \
+     sizeof(sfd_landmark_map_t) + sizeof(sfd_ekf_t) + sizeof(sfd_assoc_t) + \
      sizeof(sfd_assoc_result_t))
 
 _Static_assert(SFD_MAX_FEATURES != 256 || SFD_MAX_WINDOW != 5 ||

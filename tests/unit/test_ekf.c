@@ -263,8 +263,13 @@ static void ekf_propagated_covariance_equals_dense_transition(void **state) {
     double Rax[9], Rw[9];
     matmul(3, 3, 3, R, ax, Rax);
     assert_status(sfd_so3_exp(mdtw, Rw), SFD_OK);
-    enum { P_ = SFD_EKF_IDX_P, V_ = SFD_EKF_IDX_V, T_ = SFD_EKF_IDX_THETA, G_ = SFD_EKF_IDX_BG,
-           A_ = SFD_EKF_IDX_BA };
+    enum {
+        P_ = SFD_EKF_IDX_P,
+        V_ = SFD_EKF_IDX_V,
+        T_ = SFD_EKF_IDX_THETA,
+        G_ = SFD_EKF_IDX_BG,
+        A_ = SFD_EKF_IDX_BA
+    };
     double F[NX * NX];
     memset(F, 0, sizeof F);
     for (int i = 0; i < NX; ++i) F[i * NX + i] = 1.0;
@@ -290,8 +295,7 @@ static void ekf_propagated_covariance_equals_dense_transition(void **state) {
         Pd[(P_ + k) * NX + V_ + k] += qa * dt * dt / 2.0;
         Pd[(V_ + k) * NX + P_ + k] += qa * dt * dt / 2.0;
         Pd[(V_ + k) * NX + V_ + k] += qa * dt;
-        Pd[(T_ + k) * NX + T_ + k] +=
-            nz->gyro_noise_rad_s_rthz * nz->gyro_noise_rad_s_rthz * dt;
+        Pd[(T_ + k) * NX + T_ + k] += nz->gyro_noise_rad_s_rthz * nz->gyro_noise_rad_s_rthz * dt;
         Pd[(G_ + k) * NX + G_ + k] +=
             nz->gyro_bias_rw_rad_s2_rthz * nz->gyro_bias_rw_rad_s2_rthz * dt;
         Pd[(A_ + k) * NX + A_ + k] +=

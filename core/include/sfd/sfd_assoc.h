@@ -33,8 +33,9 @@ typedef struct {
  *  are padded to a multiple of it. */
 #define SFD_ASSOC_SCORE_BLOCK 8
 /** Capacity of the packed scoring arrays: SFD_MAX_FEATURES rounded up to the block width. */
-#define SFD_ASSOC_PACKED_CAP \
-    (((SFD_MAX_FEATURES + SFD_ASSOC_SCORE_BLOCK - 1) / SFD_ASSOC_SCORE_BLOCK) * SFD_ASSOC_SCORE_BLOCK)
+#define SFD_ASSOC_PACKED_CAP                                                    \
+    (((SFD_MAX_FEATURES + SFD_ASSOC_SCORE_BLOCK - 1) / SFD_ASSOC_SCORE_BLOCK) * \
+     SFD_ASSOC_SCORE_BLOCK)
 
 /** Parameters of the association methods. */
 typedef struct {
