@@ -83,7 +83,7 @@ else
   if ! (cd "$sysroot/.debs" && apt-get download -q "${debs[@]}" 2>/dev/null); then
     echo "[setup] arm64 package lists missing or stale: apt-get update"
     $SUDO apt-get update -q
-    (cd "$sysroot/.debs" && apt-get download -q "${debs[@]}" 2>/dev/null)
+    (cd "$sysroot/.debs" && apt-get download -q "${debs[@]}")
   fi
   for d in "$sysroot"/.debs/*.deb; do dpkg-deb -x "$d" "$sysroot"; done
   # libblas.so.3 and liblapack.so.3 are update-alternatives links, which dpkg-deb -x does not make.
