@@ -52,6 +52,48 @@ else
   echo "[setup] Debian packages: all present"
 fi
 
+# Private arm64 sysroot for the aarch64 preset's apps (sfd-node, sfd-replay, sfd-sim; docs/deploy.md).
+# Debian's liblcm1/liblcm-dev have no Multi-Arch field, so they cannot be installed for arm64
+# beside the amd64 ones the host build uses; instead their arm64 .debs and those of every
+# library they and OpenCV's core module (cv::FileStorage reads the YAML configuration, in
+# apps/common) load are downloaded with `apt-get download` and unpacked with `dpkg-deb -x`
+# into build/sysroot-arm64 (not committed). The set is the DT_NEEDED closure of liblcm.so.1,
+# libopencv_core.so.406 and libcmocka.so.0 (package dependencies that no library loads, such as
+# libglx-mesa0, are left out); the libc/libstdc++ packages make the sysroot complete for
+# `qemu-aarch64 -L build/sysroot-arm64`. A stamp holds the list: unchanged list, nothing to do.
+ARM64_SYSROOT_PKGS=(
+  liblcm1 liblcm-dev libglib2.0-0 libpcre2-8-0
+  libopencv-core406 libopencv-core-dev zlib1g libtbb12 libblas3 liblapack3 libgfortran5
+  libglx0 libglvnd0 libx11-6 libxcb1 libxau6 libxdmcp6 libbsd0 libmd0
+  libcmocka0 libcmocka-dev
+  libc6 libgcc-s1 libstdc++6
+)
+sysroot="$root/build/sysroot-arm64"
+want_sysroot="${ARM64_SYSROOT_PKGS[*]}"
+if [ -f "$sysroot/.sfd-sysroot" ] && [ "$(cat "$sysroot/.sfd-sysroot")" = "$want_sysroot" ]; then
+  echo "[setup] arm64 sysroot: present ($sysroot)"
+else
+  echo "[setup] building the arm64 sysroot in $sysroot"
+  rm -rf "$sysroot"
+  mkdir -p "$sysroot/.debs"
+  debs=()
+  for p in "${ARM64_SYSROOT_PKGS[@]}"; do debs+=("$p:arm64"); done
+  # apt-get download writes into the current directory; as root it warns that the download is
+  # unsandboxed (the _apt user cannot write there), which is harmless.
+  if ! (cd "$sysroot/.debs" && apt-get download -q "${debs[@]}" 2>/dev/null); then
+    echo "[setup] arm64 package lists missing or stale: apt-get update"
+    $SUDO apt-get update -q
+    (cd "$sysroot/.debs" && apt-get download -q "${debs[@]}")
+  fi
+  for d in "$sysroot"/.debs/*.deb; do dpkg-deb -x "$d" "$sysroot"; done
+  # libblas.so.3 and liblapack.so.3 are update-alternatives links, which dpkg-deb -x does not make.
+  ln -sfn blas/libblas.so.3 "$sysroot/usr/lib/aarch64-linux-gnu/libblas.so.3"
+  ln -sfn lapack/liblapack.so.3 "$sysroot/usr/lib/aarch64-linux-gnu/liblapack.so.3"
+  rm -rf "$sysroot/.debs" "$sysroot/usr/share/doc" "$sysroot/usr/share/locale" \
+    "$sysroot/usr/share/man" "$sysroot/usr/lib/aarch64-linux-gnu/gconv"
+  echo "$want_sysroot" > "$sysroot/.sfd-sysroot"
+fi
+
 # Python tools: a venv inside the build tree area keeps the system Python clean.
 if [ "${1:-}" != "--no-python" ]; then
   venv="$root/.venv"

@@ -3,8 +3,10 @@
 # README command (2): set up, build and run the whole test suite:
 #   host       Release: unit tests, proofs (symbols, interposer, stack, sizes), lint
 #   host-asan  Debug with AddressSanitizer + UndefinedBehaviorSanitizer
-#   cortex-m7  core cross-built for arm-none-eabi (hard float): symbol, stack and size proofs
-#   aarch64    core + unit tests cross-built, run under qemu-aarch64
+#   cortex-m7  core cross-built for arm-none-eabi (hard float): symbol, stack and size proofs; the
+#              firmware example's image and its text/data/bss, state and stack budgets
+#   aarch64    core, LCM driver, sfd-node/replay/sim cross-built against the arm64 sysroot
+#              (tools/setup.sh); unit tests, proofs and the golden replay under qemu-aarch64
 #   fuzz       clang-14 libFuzzer targets (ASan + UBSan), 20 s each from sfd-sim seeds (fuzz.*)
 # Usage: tools/test.sh [--host-only]
 set -euo pipefail

@@ -5,8 +5,14 @@
 # equal golden_verdicts.csv line for line. Any change of detector behaviour turns this red.
 # To accept a deliberate change:  tests/replay/golden.sh BUILD_DIR PYTHON TYPES_DIR --regenerate
 # then review `git diff tests/replay/` and commit it with the reason.
+# SFD_RUNNER (environment), when set, prefixes the sfd-replay command: a cross build's binary runs
+# under its emulator (integration.replay_golden_emulated: `qemu-aarch64 -L SYSROOT`) and must give
+# the host's verdicts. SFD_REPLAY_ARGS adds arguments (e.g. `--config apps/config/sfd.yaml`, which
+# states the defaults, so the verdicts must not change).
 set -euo pipefail
 build="$1"; py="$2"; pytypes="$3"; mode="${4:-}"
+read -r -a runner <<< "${SFD_RUNNER:-}"
+read -r -a extra <<< "${SFD_REPLAY_ARGS:-}"
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
@@ -14,7 +20,8 @@ if [ "$mode" = "--regenerate" ]; then
   "$build/apps/sfd-sim" mistracking -o "$here/golden.lcmlog" --frames 12 --features 40 --seed 11 \
     --outlier-ratio 0.15 --jump-px 12
 fi
-"$build/apps/sfd-replay" "$here/golden.lcmlog" -o "$tmp/out.lcmlog" >/dev/null
+"${runner[@]}" "$build/apps/sfd-replay" "$here/golden.lcmlog" -o "$tmp/out.lcmlog" "${extra[@]}" \
+  >/dev/null
 PYTHONPATH="$pytypes" "$py" "$here/verdicts_csv.py" "$tmp/out.lcmlog" > "$tmp/verdicts.csv"
 if [ "$mode" = "--regenerate" ]; then
   cp "$tmp/verdicts.csv" "$here/golden_verdicts.csv"
