@@ -111,6 +111,20 @@ Gate gate_of(Score score, const sfd_assoc_t &a, double sigma2, double noise_px2)
     }
 }
 
+/// Single-precision form of eq. (25) in normalized coordinates (see sampson_count_packed()): the
+/// residual e = x~_prev^T E x~_curr and the Sampson denominator weighted per axis,
+/// wx (g0^2 + h0^2) + wy (g1^2 + h1^2) with g = E x~_curr, h = E^T x~_prev.
+inline void sampson_terms_f(const float *E, float u1, float v1, float u2, float v2, float wx,
+                            float wy, float *e, float *den) {
+    const float g0 = E[0] * u2 + E[1] * v2 + E[2];
+    const float g1 = E[3] * u2 + E[4] * v2 + E[5];
+    const float g2 = E[6] * u2 + E[7] * v2 + E[8];
+    const float h0 = E[0] * u1 + E[3] * v1 + E[6];
+    const float h1 = E[1] * u1 + E[4] * v1 + E[7];
+    *e = u1 * g0 + v1 * g1 + g2;
+    *den = wx * (g0 * g0 + h0 * h0) + wy * (g1 * g1 + h1 * h1);
+}
+
 /// Counts the inliers of one OPRF hypothesis among the packed valid matches: the Sampson distance
 /// of eq. (25) in px^2 is at most @p thr_px2. It is evaluated in normalized coordinates x~ = K^-1
 /// x, where F = K^-T E K^-1 gives the same residual e = x~_prev^T E x~_curr and the pixel Sampson
@@ -125,8 +139,8 @@ Gate gate_of(Score score, const sfd_assoc_t &a, double sigma2, double noise_px2)
 int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], float thr_u, float thr_v,
                              int32_t nv, int32_t need) {
     constexpr int32_t kBlock = SFD_ASSOC_SCORE_BLOCK;
-    const float e0 = E[0], e1 = E[1], e2 = E[2], e3 = E[3], e4 = E[4], e5 = E[5], e6 = E[6],
-                e7 = E[7], e8 = E[8];
+    float Ek[9];  // a local copy: provably not aliased by the loop, so it stays in registers
+    for (int k = 0; k < 9; ++k) Ek[k] = E[k];
     int32_t count = 0;
     for (int32_t k0 = 0; k0 < nv; k0 += kBlock) {
         if (count + (nv - k0) < need) return count;
@@ -136,13 +150,9 @@ int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], float thr_u
         const float *v2 = a->nx_curr_v + k0;
         int32_t block_count = 0;
         for (int32_t j = 0; j < kBlock; ++j) {
-            const float g0 = e0 * u2[j] + e1 * v2[j] + e2;
-            const float g1 = e3 * u2[j] + e4 * v2[j] + e5;
-            const float g2 = e6 * u2[j] + e7 * v2[j] + e8;
-            const float h0 = e0 * u1[j] + e3 * v1[j] + e6;
-            const float h1 = e1 * u1[j] + e4 * v1[j] + e7;
-            const float e = u1[j] * g0 + v1[j] * g1 + g2;
-            const float rhs = thr_u * (g0 * g0 + h0 * h0) + thr_v * (g1 * g1 + h1 * h1);
+            float e = 0.0F;
+            float rhs = 0.0F;
+            sampson_terms_f(Ek, u1[j], v1[j], u2[j], v2[j], thr_u, thr_v, &e, &rhs);
             const int32_t in =
                 static_cast<int32_t>(e * e <= rhs) & static_cast<int32_t>(rhs > 0.0F);
             block_count += in;
@@ -158,8 +168,8 @@ int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], float thr_u
 void sampson_stat_packed(sfd_assoc_t *a, const float E[9], float inv_fx2, float inv_fy2,
                          float inv_sigma2, int32_t nv) {
     constexpr int32_t kBlock = SFD_ASSOC_SCORE_BLOCK;
-    const float e0 = E[0], e1 = E[1], e2 = E[2], e3 = E[3], e4 = E[4], e5 = E[5], e6 = E[6],
-                e7 = E[7], e8 = E[8];
+    float Ek[9];
+    for (int k = 0; k < 9; ++k) Ek[k] = E[k];
     for (int32_t k0 = 0; k0 < nv; k0 += kBlock) {
         const float *u1 = a->nx_prev_u + k0;
         const float *v1 = a->nx_prev_v + k0;
@@ -167,13 +177,9 @@ void sampson_stat_packed(sfd_assoc_t *a, const float E[9], float inv_fx2, float 
         const float *v2 = a->nx_curr_v + k0;
         float *stat = a->packed_stat + k0;
         for (int32_t j = 0; j < kBlock; ++j) {
-            const float g0 = e0 * u2[j] + e1 * v2[j] + e2;
-            const float g1 = e3 * u2[j] + e4 * v2[j] + e5;
-            const float g2 = e6 * u2[j] + e7 * v2[j] + e8;
-            const float h0 = e0 * u1[j] + e3 * v1[j] + e6;
-            const float h1 = e1 * u1[j] + e4 * v1[j] + e7;
-            const float e = u1[j] * g0 + v1[j] * g1 + g2;
-            const float den = inv_fx2 * (g0 * g0 + h0 * h0) + inv_fy2 * (g1 * g1 + h1 * h1);
+            float e = 0.0F;
+            float den = 0.0F;
+            sampson_terms_f(Ek, u1[j], v1[j], u2[j], v2[j], inv_fx2, inv_fy2, &e, &den);
             const float d = (e * e * inv_sigma2) / den;
             stat[j] = (d <= 3.0e38F) ? d : 3.0e38F;  // den = 0 gives Inf or NaN: 3e38
         }
