@@ -456,7 +456,7 @@ int main(int argc, char **argv) {
         } else if (!std::strcmp(a, "--config") && has) {
             config_path = argv[++i];
         } else if (!std::strcmp(a, "--frames") && has) {
-            if (!parse_long(argv[++i], 1, 10000000, &v)) return bad("1..10000000");
+            if (!parse_long(argv[++i], 1, 1000000, &v)) return bad("1..1000000");
             opt.frames = static_cast<int>(v);
         } else if (!std::strcmp(a, "--features") && has) {
             if (!parse_long(argv[++i], 1, SFD_MAX_FEATURES, &v)) return bad("1..SFD_MAX_FEATURES");
@@ -725,7 +725,12 @@ int main(int argc, char **argv) {
         std::printf("| deadline misses | no --budget-us |\n");
     }
     const bool fail = lost > 0 || misses > 0 || fr.empty();
-    std::printf("| result | %s%s |\n", fail ? "FAIL (exit 3)" : "ok",
+    const bool input_error = input_rc == 2 || (!opt.log_path.empty() && fr.empty());
+    std::printf("| result | %s%s |\n",
+                input_error     ? "input error (exit 2)"
+                : input_rc == 1 ? "internal failure (exit 1)"
+                : fail          ? "FAIL (exit 3)"
+                                : "ok",
                 g_stop ? ", interrupted" : "");
     std::fflush(stdout);
 
@@ -765,7 +770,7 @@ int main(int argc, char **argv) {
         }
         if (!opt.png.empty() && run_plot(opt.csv, opt.png) != 0 && rc == 0) rc = 1;
     }
-    if (input_rc == 2 || (!opt.log_path.empty() && fr.empty() && input_rc == 0)) {
+    if (input_error) {
         if (input_rc == 0) {
             std::fprintf(stderr, "sfd-hil: --log: %s has no FEATURES frame\n",
                          opt.log_path.c_str());

@@ -4,7 +4,8 @@
 # ttl=0, its own group and port), inside a private network namespace (unshare -n) whose only
 # interface is loopback with a multicast route. Each run gets a fresh node (sfd-hil's restamped
 # utimes run ahead of the wall clock at --rate 0 or > 1, so a node kept between runs would
-# reject the next run's messages as out of order). Checks:
+# reject the next run's messages as out of order). --timeout-ms 200 (a frame's round trip takes
+# a few ms) keeps a node that does not answer from stalling the closed loop. Checks:
 #  1. --sim mistracking, 300 frames, --rate 0 (closed loop): exit 0, verdicts == timing ==
 #     frames == 300, nothing lost, 300 CSV rows, the node's stop report counts 300 frames;
 #  2. the same at --rate 4 (paced, 150 frames): exit 0, nothing lost, 150 CSV rows;
@@ -80,7 +81,7 @@ check_clean_run() {  # name frames
 # 1. closed loop
 start_node rate0
 rc=0
-"$hil" --sim mistracking --frames 300 --rate 0 --lcm-url "$url" --csv "$SFD_TMP/rate0.csv" \
+"$hil" --sim mistracking --frames 300 --rate 0 --timeout-ms 200 --lcm-url "$url" --csv "$SFD_TMP/rate0.csv" \
   > "$SFD_TMP/rate0.txt" 2>&1 || rc=$?
 stop_node rate0
 [ "$rc" -eq 0 ] || { cat "$SFD_TMP/rate0.txt"; echo "rate 0: exit $rc, expected 0"; exit 1; }
@@ -91,7 +92,7 @@ grep -q "stopped: 300 frames in, 300 processed" "$SFD_TMP/node_rate0.txt" || {
 # 2. paced, 4x the recorded pace
 start_node rate4
 rc=0
-"$hil" --sim mistracking --frames 150 --rate 4 --lcm-url "$url" --csv "$SFD_TMP/rate4.csv" \
+"$hil" --sim mistracking --frames 150 --rate 4 --timeout-ms 200 --lcm-url "$url" --csv "$SFD_TMP/rate4.csv" \
   > "$SFD_TMP/rate4.txt" 2>&1 || rc=$?
 stop_node rate4
 [ "$rc" -eq 0 ] || { cat "$SFD_TMP/rate4.txt"; echo "rate 4: exit $rc, expected 0"; exit 1; }
@@ -101,7 +102,7 @@ grep -q "pacing: publish lateness" "$SFD_TMP/rate4.txt" || { echo "rate 4: no pa
 # 3. an impossible budget: every measured frame misses it, exit 3
 start_node budget
 rc=0
-"$hil" --sim mistracking --frames 60 --rate 0 --budget-us 1 --lcm-url "$url" \
+"$hil" --sim mistracking --frames 60 --rate 0 --budget-us 1 --timeout-ms 200 --lcm-url "$url" \
   > "$SFD_TMP/budget.txt" 2>&1 || rc=$?
 stop_node budget
 cat "$SFD_TMP/budget.txt"
