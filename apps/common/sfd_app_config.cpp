@@ -247,18 +247,20 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
         }
         std::string *dst[] = {&cfg->channels.imu,      &cfg->channels.camera_info,
                               &cfg->channels.features, &cfg->channels.verdict,
-                              &cfg->channels.timing,   &cfg->channels.state};
-        const char *names[] = {"imu", "camera_info", "features", "verdict", "timing", "state"};
+                              &cfg->channels.timing,   &cfg->channels.state,
+                              &cfg->channels.truth};
+        const char *names[] = {"imu",    "camera_info", "features", "verdict",
+                               "timing", "state",       "truth"};
         for (const std::string &key : ch.keys()) {
             bool found = false;
-            for (int k = 0; k < 6; ++k) found = found || key == names[k];
+            for (int k = 0; k < 7; ++k) found = found || key == names[k];
             if (!found) {
                 *error = where("channels");
                 error->append(": unknown key ").append(key);
                 return false;
             }
         }
-        for (int k = 0; k < 6; ++k) {
+        for (int k = 0; k < 7; ++k) {
             if (ch[names[k]].empty()) continue;
             if (!read_string(ch[names[k]], where(std::string("channels.") + names[k]), dst[k],
                              error)) {

@@ -17,6 +17,7 @@ struct Channels {
     std::string verdict = "SFD_VERDICT";
     std::string timing = "SFD_TIMING";
     std::string state = "SFD_STATE";
+    std::string truth = "TRUTH";  // subscribed by sfd-node only with filter.init_from_truth
 };
 
 struct AppConfig {

@@ -60,7 +60,8 @@ int64_t clock_us(void *) {
         .count();
 }
 
-sfd_node_input_t g_kinds[3] = {SFD_NODE_IMU, SFD_NODE_CAMERA_INFO, SFD_NODE_FEATURES};
+sfd_node_input_t g_kinds[4] = {SFD_NODE_IMU, SFD_NODE_CAMERA_INFO, SFD_NODE_FEATURES,
+                               SFD_NODE_TRUTH};
 
 void on_message(const lcm_recv_buf_t *rbuf, const char *, void *user) {
     const sfd_node_input_t kind = *static_cast<const sfd_node_input_t *>(user);
@@ -84,11 +85,12 @@ void usage(FILE *f) {
         "usage: sfd-node [--config F] [--lcm-url URL] [--method M]\n"
         "                [--imu-channel C] [--camera-info-channel C]\n"
         "                [--features-channel C] [--verdict-channel C] [--timing-channel C]\n"
-        "  Subscribes IMU, CAMERA_INFO, FEATURES; publishes SFD_VERDICT, SFD_STATE,\n"
-        "  SFD_TIMING.\n"
+        "                [--truth-channel C]\n"
+        "  Subscribes IMU, CAMERA_INFO, FEATURES (and TRUTH with filter.init_from_truth:\n"
+        "  1, evaluation only); publishes SFD_VERDICT, SFD_STATE, SFD_TIMING.\n"
         "  --config F    YAML configuration (apps/config/sfd.yaml documents every key)\n"
         "  --lcm-url     LCM provider (default udpm://239.255.76.67:7667?ttl=0)\n"
-        "  --method M    none | parity\n"
+        "  --method M    none | parity | oprf | ransac1 | ransacf | both\n"
         "Stops on SIGINT/SIGTERM. Exit: 0 ok, 2 bad usage or configuration, 1 internal.\n");
 }
 
@@ -131,6 +133,8 @@ int main(int argc, char **argv) {
             cfg.channels.verdict = argv[++i];
         } else if (!std::strcmp(a, "--timing-channel") && has) {
             cfg.channels.timing = argv[++i];
+        } else if (!std::strcmp(a, "--truth-channel") && has) {
+            cfg.channels.truth = argv[++i];
         } else {
             std::fprintf(stderr, "sfd-node: unknown or incomplete option: %s\n", a);
             usage(stderr);
@@ -154,6 +158,11 @@ int main(int argc, char **argv) {
     lcm_subscribe(g_app.lcm, cfg.channels.imu.c_str(), on_message, &g_kinds[0]);
     lcm_subscribe(g_app.lcm, cfg.channels.camera_info.c_str(), on_message, &g_kinds[1]);
     lcm_subscribe(g_app.lcm, cfg.channels.features.c_str(), on_message, &g_kinds[2]);
+    if (cfg.node.nav.init_from_truth) {
+        // Evaluation only: the filter starts from the first TRUTH poses (sfd-hil --sim publishes
+        // them), as in sfd-replay.
+        lcm_subscribe(g_app.lcm, cfg.channels.truth.c_str(), on_message, &g_kinds[3]);
+    }
     g_app.heap_count = reinterpret_cast<HeapCountFn>(dlsym(RTLD_DEFAULT, "sfd_heapcount_thread"));
     g_app.heap_count_total =
         reinterpret_cast<HeapCountFn>(dlsym(RTLD_DEFAULT, "sfd_heapcount_get"));
@@ -164,6 +173,10 @@ int main(int argc, char **argv) {
     std::printf("sfd-node %d.%d: method %s, alpha %g, L %d, n %d, lcm %s\n", SFD_VERSION_MAJOR,
                 SFD_VERSION_MINOR, cfg.method.c_str(), cfg.node.params.false_alarm_rate,
                 cfg.node.params.window_frames, cfg.node.params.group_size, cfg.lcm_url.c_str());
+    if (cfg.node.nav.enabled && cfg.node.nav.init_from_truth) {
+        std::printf("sfd-node: filter starts from TRUTH on %s (evaluation only)\n",
+                    cfg.channels.truth.c_str());
+    }
     if (cfg.node.nav.enabled && cfg.node.nav.gyro_bias_at_rest) {
         std::printf(
             "sfd-node: gyro bias estimated: mean gyro over the first %.2f s at rest, then "

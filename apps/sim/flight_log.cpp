@@ -12,7 +12,12 @@
 //    paper's fault k(-1, 1)^T (normalized coordinates) added from that frame on;
 //  - mistracking: the same with a jump of jump_px in a random direction;
 //  - moving-object: 10% of the landmarks move on the ground at 3 m/s (spurious in every frame),
-//    plus mistracking at outlier_ratio.
+//    plus mistracking at outlier_ratio;
+//  - worst-case (the node at full capacity, for sfd-hil): the mistracking flight without
+//    mistracks, in which every frame round(random_fraction * n) of the features, drawn at random,
+//    are replaced by pixels uniform over the image (keeping their track ids; spurious). At
+//    random_fraction = 1 every match is an outlier: RANSAC-type methods exhaust their hypothesis
+//    budget and every parity group fails.
 // A mistracked track follows a wrong point from the jump on; it is labelled spurious in the
 // truth_window frames starting at the jump: for a detector window of L frames, the L - 1 frames
 // whose window mixes observations of both points (default 2, for L = 3).
@@ -21,6 +26,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <vector>
 
 #include "lcm_log.hpp"
@@ -94,9 +100,30 @@ struct Landmark {
 
 }  // namespace
 
-int write_flight_log(const FlightOptions &opt) {
+bool is_flight_scenario(const std::string &scenario) {
+    return scenario == "paper-uav" || scenario == "mistracking" || scenario == "moving-object" ||
+           scenario == "worst-case";
+}
+
+namespace {
+
+// Per-frame message storage (~25 KB), heap-allocated once per flight.
+struct FrameBuffers {
+    sfd_feature_frame_t ff;
+    sfd_truth_t tr;
+    std::vector<uint8_t> buf = std::vector<uint8_t>(size_t{64} * 1024);
+};
+
+}  // namespace
+
+int generate_flight(const FlightOptions &opt, FlightSink &sink, FlightStats *stats) {
+    FlightStats local;
+    FlightStats &st = stats != nullptr ? *stats : local;
+    st = FlightStats{};
+    if (!is_flight_scenario(opt.scenario)) return 2;
     const bool paper = opt.scenario == "paper-uav";
     const bool moving = opt.scenario == "moving-object";
+    const bool worst = opt.scenario == "worst-case";
     Trajectory traj;
     traj.altitude = paper ? 58.0 : 20.0;
     sfd_prng_t rng;
@@ -108,12 +135,21 @@ int write_flight_log(const FlightOptions &opt) {
     const double R_CtoB[9] = {1, 0, 0, 0, -1, 0, 0, 0, -1};
     const double p_CinB[3] = {0.05, 0.0, -0.02};
 
-    LogWriter log(opt.out_path);
-    if (!log.ok()) {
-        std::fprintf(stderr, "sfd-sim: -o: cannot write %s\n", opt.out_path.c_str());
-        return 2;
-    }
-    std::vector<uint8_t> buf(size_t{64} * 1024);
+    std::unique_ptr<FrameBuffers> fb(new FrameBuffers);
+    std::vector<uint8_t> &buf = fb->buf;
+    bool encode_failed = false;
+    // Encoded size n of the message in buf to the sink; false: stop (encode failure or the sink).
+    auto emit = [&](const char *channel, int64_t utime, int n) {
+        if (n < 0) {
+            encode_failed = true;
+            return false;
+        }
+        if (!sink.message(channel, utime, buf.data(), n)) {
+            st.stopped = true;
+            return false;
+        }
+        return true;
+    };
     const int64_t t_start_us = 1000000;
 
     // CAMERA_INFO first (and once per second, as a live publisher would).
@@ -180,9 +216,10 @@ int write_flight_log(const FlightOptions &opt) {
 
     const double dt_imu = 0.005, dt_cam = 0.05;
     const double sigma_g = opt.gyro_noise / std::sqrt(dt_imu);
-    const double p_jump = opt.outlier_ratio / std::max(1, opt.truth_window - 1);
-    static sfd_feature_frame_t ff;
-    static sfd_truth_t tr;
+    const double p_jump = worst ? 0.0 : opt.outlier_ratio / std::max(1, opt.truth_window - 1);
+    sfd_feature_frame_t &ff = fb->ff;
+    sfd_truth_t &tr = fb->tr;
+    std::vector<int> order(lms.size());  // worst-case: the features replaced this frame
     int64_t imu_index = 0;
     long n_spurious = 0, n_total = 0;
     for (int f = 0; f < opt.frames; ++f) {
@@ -203,13 +240,14 @@ int write_flight_log(const FlightOptions &opt) {
                 for (int k = 0; k < 3; ++k) m.accel[r] += P.R_BtoW[3 * k + r] * f_W[k];
             }
             const int n = sfd_imu_t_encode(buf.data(), 0, int(buf.size()), &m);
-            log.write("IMU", m.utime, buf, n);
+            if (!emit("IMU", m.utime, n)) break;
         }
+        if (encode_failed || st.stopped) break;
         const int64_t utime = t_start_us + int64_t(f) * 50000;
         if (f % 20 == 0) {
             ci.utime = utime;
             const int n = sfd_camera_info_t_encode(buf.data(), 0, int(buf.size()), &ci);
-            log.write("CAMERA_INFO", utime, buf, n);
+            if (!emit("CAMERA_INFO", utime, n)) break;
         }
         std::memset(&ff, 0, sizeof ff);
         std::memset(&tr, 0, sizeof tr);
@@ -248,26 +286,79 @@ int write_flight_log(const FlightOptions &opt) {
             tr.track_id[k] = L.track_id;
             const bool spurious = L.mover || (f - L.last_jump_frame < opt.truth_window);
             tr.spurious[k] = spurious ? 1 : 0;
-            n_spurious += spurious;
-            ++n_total;
             ++k;
         }
+        if (worst) {
+            // round(F * k) of this frame's features, drawn without replacement (partial
+            // Fisher-Yates), move to uniformly random pixels: an outlier for every method.
+            const int n_random = static_cast<int>(std::lround(opt.random_fraction * k));
+            for (int i = 0; i < k; ++i) order[static_cast<size_t>(i)] = i;
+            for (int i = 0; i < n_random; ++i) {
+                const int j =
+                    i + std::min(k - 1 - i, static_cast<int>(sfd_prng_uniform(&rng) * (k - i)));
+                std::swap(order[static_cast<size_t>(i)], order[static_cast<size_t>(j)]);
+                const int m = order[static_cast<size_t>(i)];
+                ff.u[m] = cam.width_px * sfd_prng_uniform(&rng);
+                ff.v[m] = cam.height_px * sfd_prng_uniform(&rng);
+                tr.spurious[m] = 1;
+            }
+        }
+        for (int i = 0; i < k; ++i) n_spurious += tr.spurious[i];
+        n_total += k;
         ff.num_features = k;
         tr.num_features = k;
         int n = sfd_feature_frame_t_encode(buf.data(), 0, int(buf.size()), &ff);
-        log.write("FEATURES", utime, buf, n);
+        if (!emit("FEATURES", utime, n)) break;
+        ++st.frames;
         n = sfd_truth_t_encode(buf.data(), 0, int(buf.size()), &tr);
-        log.write("TRUTH", utime, buf, n);
+        if (!emit("TRUTH", utime, n)) break;
     }
+    st.imu = imu_index;
+    st.features = n_total;
+    st.spurious = n_spurious;
+    return encode_failed ? 1 : 0;
+}
+
+namespace {
+
+// The log file sink of sfd-sim -o.
+class LogSink : public FlightSink {
+  public:
+    explicit LogSink(const std::string &path) : log_(path) {}
+    bool ok() const { return log_.ok(); }
+    bool message(const char *channel, int64_t utime, const uint8_t *data, int size) override {
+        log_.write(channel, utime, data, size);
+        return true;
+    }
+
+  private:
+    LogWriter log_;
+};
+
+}  // namespace
+
+int write_flight_log(const FlightOptions &opt) {
+    if (!is_flight_scenario(opt.scenario)) {
+        std::fprintf(stderr, "sfd-sim: -o: scenario %s writes no log\n", opt.scenario.c_str());
+        return 2;
+    }
+    LogSink log(opt.out_path);
     if (!log.ok()) {
+        std::fprintf(stderr, "sfd-sim: -o: cannot write %s\n", opt.out_path.c_str());
+        return 2;
+    }
+    FlightStats st;
+    const int rc = generate_flight(opt, log, &st);
+    if (rc != 0 || !log.ok()) {
         std::fprintf(stderr, "sfd-sim: writing %s failed\n", opt.out_path.c_str());
         return 1;
     }
     std::printf(
         "sfd-sim %s: wrote %s: %d frames, %lld IMU samples, %.1f features per frame, "
         "%.1f%% spurious (seed %llu)\n",
-        opt.scenario.c_str(), opt.out_path.c_str(), opt.frames, static_cast<long long>(imu_index),
-        double(n_total) / opt.frames, 100.0 * double(n_spurious) / double(n_total ? n_total : 1),
+        opt.scenario.c_str(), opt.out_path.c_str(), opt.frames, st.imu,
+        double(st.features) / opt.frames,
+        100.0 * double(st.spurious) / double(st.features ? st.features : 1),
         static_cast<unsigned long long>(opt.seed));
     return 0;
 }

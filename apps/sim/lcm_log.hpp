@@ -29,6 +29,9 @@ class LogWriter {
     /// One event: channel, its timestamp (us), the first `size` bytes of `data` (an encode's
     /// return; a negative size is an encode failure and is recorded as a write failure).
     void write(const char *channel, int64_t utime, const std::vector<uint8_t> &data, int size) {
+        write(channel, utime, data.data(), size);
+    }
+    void write(const char *channel, int64_t utime, const uint8_t *data, int size) {
         if (log_ == nullptr || size < 0) {
             failed_ = true;
             return;
@@ -39,7 +42,7 @@ class LogWriter {
         ev.channellen = static_cast<int32_t>(std::strlen(channel));
         ev.datalen = size;
         ev.channel = const_cast<char *>(channel);
-        ev.data = const_cast<uint8_t *>(data.data());
+        ev.data = const_cast<uint8_t *>(data);
         if (lcm_eventlog_write_event(log_, &ev) != 0) failed_ = true;
     }
 

@@ -58,6 +58,7 @@ struct Options {
     double semireal_depth_var = -1.0;
     double track_loss = 0.02;
     double mover_speed = 0.5;
+    double random_fraction = 1.0;  // worst-case
 };
 
 void usage(FILE *out) {
@@ -70,6 +71,14 @@ void usage(FILE *out) {
         "  mistracking    20 m altitude, tracks jumping by --jump-px\n"
         "  moving-object  20 m altitude, 10%% of landmarks moving at 3 m/s, + mistracking\n"
         "  euroc-semireal EuRoC IMU + ground truth (--euroc DIR), simulated landmarks (below)\n"
+        "  worst-case     the node at full capacity (sfd-hil): the mistracking flight with\n"
+        "                 --features N (default and max %d = SFD_MAX_FEATURES of this build,\n"
+        "                 the node's capacity) per frame, of which round(F * N), drawn anew\n"
+        "                 every frame, are replaced by pixels uniform over the image (same\n"
+        "                 track ids; TRUTH: spurious), F = --random-fraction (1.0). At F = 1\n"
+        "                 every match is an outlier: OPRF/RANSAC use their whole hypothesis\n"
+        "                 budget every frame once the filter runs, every parity group fails\n"
+        "                 and goes into isolation. No mistracks (--outlier-ratio ignored).\n"
         "Summary scenarios:\n"
         "  paper-uav   Tornqvist et al. 2008 Section IV: helicopter at 58 m, downward\n"
         "              camera, features over 40x40 m; parity test Monte Carlo: P_fa and\n"
@@ -103,8 +112,10 @@ void usage(FILE *out) {
         "  --pixel-noise S     pixel noise (1 px)\n"
         "  --truth-window W    frames a mistracked track is labelled spurious: the\n"
         "                      windows that mix the old and new point, L - 1 (2)\n"
+        "  --random-fraction F worst-case: fraction of features replaced by random\n"
+        "                      pixels every frame, 0..1 (1.0)\n"
         "Exit: 0 ok, 2 bad usage, 1 internal failure.\n",
-        SFD_MAX_FEATURES);
+        SFD_MAX_FEATURES, SFD_MAX_FEATURES);
     sfdsim::thesis_loop_help(out);
     sfdsim::semireal_help(out);
 }
@@ -387,7 +398,7 @@ int main(int argc, char **argv) {
             opt.config_out = argv[++i];
         } else if ((!std::strcmp(a, "--camera-hz") || !std::strcmp(a, "--spurious-fraction") ||
                     !std::strcmp(a, "--pixel-sigma") || !std::strcmp(a, "--track-loss") ||
-                    !std::strcmp(a, "--mover-speed")) &&
+                    !std::strcmp(a, "--mover-speed") || !std::strcmp(a, "--random-fraction")) &&
                    i + 1 < argc) {
             char *end = nullptr;
             const double x = std::strtod(argv[++i], &end);
@@ -399,7 +410,8 @@ int main(int argc, char **argv) {
                           {"--spurious-fraction", 0.0, 0.9, &opt.spurious_fraction},
                           {"--pixel-sigma", 0.0, 100.0, &opt.pixel_sigma},
                           {"--track-loss", 0.0, 1.0, &opt.track_loss},
-                          {"--mover-speed", 0.0, 100.0, &opt.mover_speed}};
+                          {"--mover-speed", 0.0, 100.0, &opt.mover_speed},
+                          {"--random-fraction", 0.0, 1.0, &opt.random_fraction}};
             for (const Range &r : ranges) {
                 if (std::strcmp(a, r.flag) != 0) continue;
                 if (*end != '\0' || !(x >= r.lo && x <= r.hi)) {
@@ -446,12 +458,10 @@ int main(int argc, char **argv) {
         return sfdsim::write_semireal_log(so);
     }
     if (opt.out_log != nullptr) {
-        if (std::strcmp(opt.scenario, "paper-uav") != 0 &&
-            std::strcmp(opt.scenario, "mistracking") != 0 &&
-            std::strcmp(opt.scenario, "moving-object") != 0) {
+        if (!sfdsim::is_flight_scenario(opt.scenario)) {
             std::fprintf(stderr,
                          "sfd-sim: -o: scenario %s writes no log (paper-uav, mistracking, "
-                         "moving-object do)\n",
+                         "moving-object, worst-case, euroc-semireal do)\n",
                          opt.scenario);
             return 2;
         }
@@ -460,7 +470,9 @@ int main(int argc, char **argv) {
         fo.out_path = opt.out_log;
         fo.seed = opt.seed;
         fo.frames = opt.frames > 0 ? opt.frames : 400;
-        fo.features = opt.features > 0 ? opt.features : 200;
+        const bool worst = !std::strcmp(opt.scenario, "worst-case");
+        fo.features = opt.features > 0 ? opt.features : (worst ? SFD_MAX_FEATURES : 200);
+        fo.random_fraction = opt.random_fraction;
         fo.outlier_ratio = opt.outlier_ratio;
         fo.fault_magnitude = opt.fault_magnitude;
         fo.jump_px = opt.jump_px;
@@ -504,7 +516,7 @@ int main(int argc, char **argv) {
     }
     std::fprintf(stderr,
                  "sfd-sim: unknown scenario: %s (available: paper-uav, isolation, uav-imu, "
-                 "thesis-loop, euroc-semireal)\n",
+                 "thesis-loop, euroc-semireal; mistracking, moving-object, worst-case with -o)\n",
                  opt.scenario);
     return 2;
 }

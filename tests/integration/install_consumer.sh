@@ -19,6 +19,11 @@ grep -q "^ExecStart=$tmp/prefix/bin/sfd-node --config $tmp/prefix/etc/sfd/sfd.ya
   "$tmp/prefix/share/sfd/sfd-node.service"
 test -f "$tmp/prefix/share/sfd/deploy.md"
 "$tmp/prefix/bin/sfd-node" --help >/dev/null
+# the timing tool, its histogram script and its documentation
+test -x "$tmp/prefix/bin/sfd-hil"
+test -f "$tmp/prefix/share/sfd/plot_hil.py"
+test -f "$tmp/prefix/share/sfd/hil.md"
+"$tmp/prefix/bin/sfd-hil" --help >/dev/null
 # the installed configuration is one the node accepts (it fails on any unknown/invalid key)
 "$tmp/prefix/bin/sfd-replay" "$src/tests/replay/golden.lcmlog" \
   --config "$tmp/prefix/etc/sfd/sfd.yaml" >/dev/null

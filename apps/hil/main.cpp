@@ -1,0 +1,787 @@
+// SPDX-License-Identifier: MIT
+// sfd-hil: hardware-in-the-loop style timing of a running sfd-node (docs/hil.md). Publishes the
+// sensor messages of a log (--log) or of a simulated flight (--sim, library sfd_sim_flight) over
+// real LCM at the recorded pace scaled by --rate (0: closed loop, each frame as soon as the
+// previous frame's verdict arrived or timed out), receives SFD_VERDICT and SFD_TIMING, matches
+// them to the frames by utime, and reports end-to-end latency (CLOCK_MONOTONIC from just before
+// the FEATURES publish to the verdict's arrival), the node's own time per frame (SFD_TIMING
+// total_us), jitter, deadline misses and lost messages. One CSV row per frame (--csv); a latency
+// histogram (--png) drawn by tools/plot_hil.py.
+#include <lcm/lcm.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <condition_variable>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include "flight_log.hpp"
+#include "sfd_app_config.hpp"
+#include "sfd_feature_frame_t.h"
+#include "sfd_feature_verdict_t.h"
+#include "sfd_hil_paths.h"  // SFD_HIL_PYTHON, SFD_HIL_PLOT_SCRIPT (generated)
+#include "sfd_timing_t.h"
+
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;  // 1: first SIGINT/SIGTERM, 2: second
+void on_signal(int) {
+    g_stop = g_stop + 1 < 2 ? g_stop + 1 : 2;
+}
+
+int64_t mono_ns() {
+    timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return int64_t(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+}
+int64_t realtime_us() {
+    timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return int64_t(ts.tv_sec) * 1000000LL + ts.tv_nsec / 1000;
+}
+
+int64_t get_be64(const uint8_t *p) {
+    uint64_t v = 0;
+    for (int k = 0; k < 8; ++k) v = (v << 8) | p[k];
+    return static_cast<int64_t>(v);
+}
+void put_be64(uint8_t *p, int64_t x) {
+    uint64_t v = static_cast<uint64_t>(x);
+    for (int k = 7; k >= 0; --k) {
+        p[k] = static_cast<uint8_t>(v & 0xFF);
+        v >>= 8;
+    }
+}
+uint32_t get_be32(const uint8_t *p) {
+    return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | p[3];
+}
+
+struct Options {
+    std::string log_path;
+    std::string sim;
+    int frames = 400;
+    int features = -1;  // scenario default
+    uint64_t seed = 1;
+    double random_fraction = 1.0;
+    double rate = 1.0;
+    long budget_us = 0;  // 0: no deadline
+    bool budget_e2e = false;
+    std::string csv, png;
+    long timeout_ms = 1000;
+    long warmup = 10;
+    bool restamp = true;
+};
+
+// One FEATURES frame: what was published and what came back.
+struct Frame {
+    int64_t utime = 0;     // as published (restamped)
+    int64_t sched_ns = 0;  // when the pacing meant to publish it (rate > 0)
+    int64_t pub_ns = 0;    // CLOCK_MONOTONIC just before lcm_publish
+    int64_t verdict_ns = -1;
+    int32_t features = 0;
+    int32_t verdict_features = -1;
+    bool timing = false;
+    int32_t ingest_us = 0, parity_us = 0, association_us = 0, update_us = 0, total_us = 0;
+    int32_t hypotheses = 0;
+    int8_t budget_exhausted = 0;
+};
+
+struct Shared {
+    std::mutex mu;
+    std::condition_variable cv;
+    std::vector<Frame> frames;
+    std::unordered_map<int64_t, size_t> by_utime;
+    long verdicts = 0, timings = 0, unknown_verdicts = 0, unknown_timings = 0, duplicates = 0;
+    bool have_first_timing = false;
+    int64_t first_rejected[SFD_TIMING_T_NUM_REASONS] = {0};
+    int64_t last_rejected[SFD_TIMING_T_NUM_REASONS] = {0};
+    int32_t first_timing_features = 0;
+};
+
+Shared g;
+
+void on_verdict(const lcm_recv_buf_t *rbuf, const char *, void *) {
+    const int64_t now = mono_ns();
+    static sfd_feature_verdict_t v;  // the receive thread's only
+    if (sfd_feature_verdict_t_decode(rbuf->data, 0, static_cast<int>(rbuf->data_size), &v) < 0) {
+        std::lock_guard<std::mutex> lk(g.mu);
+        ++g.unknown_verdicts;
+        return;
+    }
+    std::lock_guard<std::mutex> lk(g.mu);
+    const auto it = g.by_utime.find(v.utime);
+    if (it == g.by_utime.end()) {
+        ++g.unknown_verdicts;
+        return;
+    }
+    Frame &f = g.frames[it->second];
+    if (f.verdict_ns >= 0) {
+        ++g.duplicates;
+        return;
+    }
+    ++g.verdicts;
+    f.verdict_ns = now;
+    f.verdict_features = v.num_features;
+    g.cv.notify_all();
+}
+
+void on_timing(const lcm_recv_buf_t *rbuf, const char *, void *) {
+    sfd_timing_t t;
+    if (sfd_timing_t_decode(rbuf->data, 0, static_cast<int>(rbuf->data_size), &t) < 0) {
+        std::lock_guard<std::mutex> lk(g.mu);
+        ++g.unknown_timings;
+        return;
+    }
+    std::lock_guard<std::mutex> lk(g.mu);
+    const auto it = g.by_utime.find(t.utime);
+    if (it == g.by_utime.end()) {
+        ++g.unknown_timings;
+        return;
+    }
+    Frame &f = g.frames[it->second];
+    if (f.timing) return;
+    ++g.timings;
+    f.timing = true;
+    f.ingest_us = t.ingest_us;
+    f.parity_us = t.parity_us;
+    f.association_us = t.association_us;
+    f.update_us = t.update_us;
+    f.total_us = t.total_us;
+    f.hypotheses = t.hypotheses_used;
+    f.budget_exhausted = t.budget_exhausted;
+    if (!g.have_first_timing) {
+        g.have_first_timing = true;
+        std::memcpy(g.first_rejected, t.rejected, sizeof g.first_rejected);
+    }
+    std::memcpy(g.last_rejected, t.rejected, sizeof g.last_rejected);
+    g.cv.notify_all();
+}
+
+// Publishes the sensor messages over LCM: pacing, restamping, closed loop.
+class Publisher : public sfdsim::FlightSink {
+  public:
+    Publisher(lcm_t *lcm, const sfdapp::Channels &ch, const Options &opt)
+        : lcm_(lcm), ch_(ch), opt_(opt) {}
+
+    bool message(const char *channel, int64_t utime, const uint8_t *data, int size) override {
+        if (g_stop) return false;
+        const std::string *out = channel_of(channel);
+        if (out == nullptr || size < 0) return true;  // not a sensor channel: not published
+        buf_.assign(data, data + size);
+        const bool features = out == &ch_.features;
+        int32_t n_feat = 0;
+        int64_t frame_utime = 0;
+        if (features) {
+            if (sfd_feature_frame_t_decode(buf_.data(), 0, size, &ff_) != size) {
+                ++malformed_;
+                return true;
+            }
+            n_feat = ff_.num_features;
+            frame_utime = ff_.utime;
+        }
+        if (!started_) {
+            started_ = true;
+            t0_event_us_ = utime;
+            t0_ns_ = mono_ns();
+            offset_us_ = opt_.restamp && size >= 16 ? realtime_us() - get_be64(buf_.data() + 8) : 0;
+        }
+        if (opt_.restamp && size >= 16) {
+            put_be64(buf_.data() + 8, get_be64(buf_.data() + 8) + offset_us_);
+            frame_utime += offset_us_;
+        }
+        int64_t sched = 0;
+        if (opt_.rate > 0.0) {
+            sched =
+                t0_ns_ + static_cast<int64_t>(double(utime - t0_event_us_) * 1000.0 / opt_.rate);
+            timespec ts;
+            ts.tv_sec = static_cast<time_t>(sched / 1000000000LL);
+            ts.tv_nsec = static_cast<long>(sched % 1000000000LL);
+            while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+                if (g_stop) return false;
+            }
+        }
+        size_t index = 0;
+        if (features) {
+            std::lock_guard<std::mutex> lk(g.mu);
+            index = g.frames.size();
+            Frame f;
+            f.utime = frame_utime;
+            f.sched_ns = sched;
+            f.features = n_feat;
+            g.frames.push_back(f);
+            g.by_utime.emplace(frame_utime, index);  // a repeated utime keeps the first frame
+            g.frames[index].pub_ns = mono_ns();
+        }
+        if (lcm_publish(lcm_, out->c_str(), buf_.data(), static_cast<unsigned int>(size)) != 0) {
+            ++publish_failures_;
+        }
+        ++published_;
+        if (features && opt_.rate <= 0.0) {
+            // Closed loop: the next frame waits for this frame's verdict (or the timeout).
+            std::unique_lock<std::mutex> lk(g.mu);
+            const int64_t deadline = g.frames[index].pub_ns + opt_.timeout_ms * 1000000LL;
+            while (g.frames[index].verdict_ns < 0 && !g_stop) {
+                const int64_t left = deadline - mono_ns();
+                if (left <= 0) break;
+                g.cv.wait_for(lk, std::chrono::nanoseconds(std::min<int64_t>(left, 50000000)));
+            }
+        }
+        return !g_stop;
+    }
+
+    long published() const { return published_; }
+    long malformed() const { return malformed_; }
+    long publish_failures() const { return publish_failures_; }
+
+  private:
+    // The configured channel of a sensor message given by its default or configured name.
+    const std::string *channel_of(const char *c) const {
+        if (!std::strcmp(c, "IMU") || ch_.imu == c) return &ch_.imu;
+        if (!std::strcmp(c, "CAMERA_INFO") || ch_.camera_info == c) return &ch_.camera_info;
+        if (!std::strcmp(c, "FEATURES") || ch_.features == c) return &ch_.features;
+        if (!std::strcmp(c, "TRUTH") || ch_.truth == c) return &ch_.truth;
+        return nullptr;
+    }
+
+    lcm_t *lcm_;
+    const sfdapp::Channels &ch_;
+    const Options &opt_;
+    std::vector<uint8_t> buf_;
+    sfd_feature_frame_t ff_{};
+    bool started_ = false;
+    int64_t t0_event_us_ = 0, t0_ns_ = 0, offset_us_ = 0;
+    long published_ = 0, malformed_ = 0, publish_failures_ = 0;
+};
+
+// Reads an LCM log (LCM's event log format) with bounds checks on every field, so that no input
+// file can crash the tool; events go to the sink in file order. Returns 0, or 2 with a reason.
+int play_log(const std::string &path, sfdsim::FlightSink &sink, long *events, std::string *err) {
+    FILE *f = std::fopen(path.c_str(), "rb");
+    if (f == nullptr) {
+        *err = path + ": cannot open";
+        return 2;
+    }
+    std::vector<uint8_t> data;
+    std::string channel;
+    uint8_t hdr[28];
+    *events = 0;
+    int rc = 0;
+    for (;;) {
+        const size_t got = std::fread(hdr, 1, sizeof hdr, f);
+        if (got == 0) break;
+        if (got != sizeof hdr || get_be32(hdr) != 0xEDA1DA01u) {
+            *err = path + ": event " + std::to_string(*events) + ": not an LCM log event";
+            rc = 2;
+            break;
+        }
+        const int64_t ts = get_be64(hdr + 12);
+        const uint32_t chlen = get_be32(hdr + 20), dlen = get_be32(hdr + 24);
+        if (chlen == 0 || chlen > 256 || dlen > 16u * 1024u * 1024u) {
+            *err = path + ": event " + std::to_string(*events) + ": bad channel or data length";
+            rc = 2;
+            break;
+        }
+        channel.resize(chlen);
+        data.resize(dlen);
+        if (std::fread(&channel[0], 1, chlen, f) != chlen ||
+            (dlen > 0 && std::fread(data.data(), 1, dlen, f) != dlen)) {
+            *err = path + ": event " + std::to_string(*events) + ": truncated";
+            rc = 2;
+            break;
+        }
+        ++*events;
+        if (!sink.message(channel.c_str(), ts, data.data(), static_cast<int>(dlen))) break;
+    }
+    std::fclose(f);
+    return rc;
+}
+
+struct Stats {
+    size_t n = 0;
+    double min = 0, median = 0, p99 = 0, p999 = 0, max = 0, mean = 0, sd = 0;
+};
+
+// Nearest-rank percentiles.
+Stats stats_of(std::vector<double> v) {
+    Stats s;
+    s.n = v.size();
+    if (v.empty()) return s;
+    std::sort(v.begin(), v.end());
+    auto pct = [&](double p) {
+        const size_t r = static_cast<size_t>(std::ceil(p * double(v.size())));
+        return v[std::min(v.size() - 1, r == 0 ? 0 : r - 1)];
+    };
+    s.min = v.front();
+    s.max = v.back();
+    s.median = pct(0.5);
+    s.p99 = pct(0.99);
+    s.p999 = pct(0.999);
+    double sum = 0;
+    for (double x : v) sum += x;
+    s.mean = sum / double(v.size());
+    double ss = 0;
+    for (double x : v) ss += (x - s.mean) * (x - s.mean);
+    s.sd = v.size() > 1 ? std::sqrt(ss / double(v.size() - 1)) : 0.0;
+    return s;
+}
+
+void usage(FILE *out) {
+    std::fprintf(
+        out,
+        "usage: sfd-hil (--log IN.lcmlog | --sim SCENARIO [--frames N] [--features N]\n"
+        "               [--seed N] [--random-fraction F]) [--config F] [--rate R]\n"
+        "               [--budget-us N] [--budget-of e2e|node] [--lcm-url URL] [--csv OUT.csv]\n"
+        "               [--png OUT.png] [--timeout-ms N] [--warmup N] [--no-restamp]\n"
+        "  Publishes IMU, CAMERA_INFO, FEATURES and TRUTH to a running sfd-node over LCM,\n"
+        "  receives SFD_VERDICT and SFD_TIMING, and reports latency, jitter, deadline misses\n"
+        "  and lost messages (docs/hil.md).\n"
+        "  --log F            sensor messages from an LCM log (other channels are skipped)\n"
+        "  --sim S            a simulated flight generated on the fly: paper-uav, mistracking,\n"
+        "                     moving-object, worst-case (sfd-sim --help)\n"
+        "  --frames N         --sim: camera frames at 20 Hz (400)\n"
+        "  --features N       --sim: features per frame (200; worst-case %d)\n"
+        "  --seed N           --sim: seed (1)\n"
+        "  --random-fraction F  --sim worst-case: features replaced by random pixels (1.0)\n"
+        "  --config F         YAML configuration of the node (channels.*, lcm_url)\n"
+        "  --rate R           pace: R x the recorded pace (1.0); 0 = closed loop, each frame\n"
+        "                     published as soon as the previous verdict arrived or timed out\n"
+        "  --budget-us N      deadline per frame in us (none by default)\n"
+        "  --budget-of W      node: SFD_TIMING total_us (default); e2e: end-to-end latency\n"
+        "  --lcm-url URL      LCM provider (default: the config's, "
+        "udpm://239.255.76.67:7667?ttl=0)\n"
+        "  --csv F            one row per frame\n"
+        "  --png F            latency histogram (runs tools/plot_hil.py; $SFD_PYTHON and\n"
+        "                     $SFD_PLOT_HIL override the interpreter and the script)\n"
+        "  --timeout-ms N     a frame without verdict this long after its publish is lost (1000)\n"
+        "  --warmup N         first N frames left out of the latency figures (10)\n"
+        "  --no-restamp       publish the recorded utimes (default: shifted so that the first\n"
+        "                     message is at the wall-clock time now, so a running node accepts\n"
+        "                     repeated runs)\n"
+        "SIGINT/SIGTERM: stop publishing, wait up to --timeout-ms for outstanding verdicts (a\n"
+        "second signal: at once), report what was measured.\n"
+        "Exit: 0 ok; 2 bad usage or input; 3 a frame missed the budget or messages were lost;\n"
+        "1 internal failure.\n",
+        SFD_MAX_FEATURES);
+}
+
+bool parse_long(const char *s, long lo, long hi, long *out) {
+    char *end = nullptr;
+    errno = 0;
+    const long v = std::strtol(s, &end, 10);
+    if (end == s || *end != '\0' || errno != 0 || v < lo || v > hi) return false;
+    *out = v;
+    return true;
+}
+
+bool parse_double(const char *s, double lo, double hi, double *out) {
+    char *end = nullptr;
+    const double v = std::strtod(s, &end);
+    if (end == s || *end != '\0' || !(v >= lo && v <= hi)) return false;
+    *out = v;
+    return true;
+}
+
+// tools/plot_hil.py: $SFD_PLOT_HIL, else next to an installed sfd-hil (PREFIX/share/sfd), else
+// the source tree's. The interpreter: $SFD_PYTHON, else the project's venv, else python3.
+int run_plot(const std::string &csv, const std::string &png) {
+    const char *py = std::getenv("SFD_PYTHON");
+    const char *script = std::getenv("SFD_PLOT_HIL");
+    std::string p = py && *py ? py : SFD_HIL_PYTHON;
+    if (!(py && *py) && access(p.c_str(), X_OK) != 0) p = "python3";
+    std::string s = SFD_HIL_PLOT_SCRIPT;
+    char exe[4096];
+    const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (n > 0) {
+        exe[n] = '\0';
+        std::string dir(exe);
+        dir.resize(dir.rfind('/'));
+        const std::string installed = dir + "/../share/sfd/plot_hil.py";
+        if (access(installed.c_str(), R_OK) == 0) s = installed;
+    }
+    if (script && *script) s = script;
+    std::vector<std::string> args = {p, s, csv, png};
+    std::vector<char *> argv;
+    argv.reserve(args.size() + 1);
+    for (std::string &a : args) argv.push_back(&a[0]);
+    argv.push_back(nullptr);
+    pid_t pid = 0;
+    if (posix_spawnp(&pid, p.c_str(), nullptr, nullptr, argv.data(), environ) != 0) {
+        std::fprintf(stderr, "sfd-hil: --png: cannot run %s\n", p.c_str());
+        return 1;
+    }
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        std::fprintf(stderr, "sfd-hil: --png: %s %s failed\n", p.c_str(), s.c_str());
+        return 1;
+    }
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    Options opt;
+    sfdapp::AppConfig cfg;
+    std::string err, config_path, lcm_url;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const bool has = i + 1 < argc;
+        long v = 0;
+        auto bad = [&](const char *what) {
+            std::fprintf(stderr, "sfd-hil: %s: expected %s, got %s\n", a, what, argv[i]);
+            return 2;
+        };
+        if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
+            usage(stdout);
+            return 0;
+        } else if (!std::strcmp(a, "--log") && has) {
+            opt.log_path = argv[++i];
+        } else if (!std::strcmp(a, "--sim") && has) {
+            opt.sim = argv[++i];
+        } else if (!std::strcmp(a, "--config") && has) {
+            config_path = argv[++i];
+        } else if (!std::strcmp(a, "--frames") && has) {
+            if (!parse_long(argv[++i], 1, 1000000, &v)) return bad("1..1000000");
+            opt.frames = static_cast<int>(v);
+        } else if (!std::strcmp(a, "--features") && has) {
+            if (!parse_long(argv[++i], 1, SFD_MAX_FEATURES, &v)) return bad("1..SFD_MAX_FEATURES");
+            opt.features = static_cast<int>(v);
+        } else if (!std::strcmp(a, "--seed") && has) {
+            if (!parse_long(argv[++i], 0, 2147483647L, &v)) return bad("a non-negative integer");
+            opt.seed = static_cast<uint64_t>(v);
+        } else if (!std::strcmp(a, "--random-fraction") && has) {
+            if (!parse_double(argv[++i], 0.0, 1.0, &opt.random_fraction)) return bad("0..1");
+        } else if (!std::strcmp(a, "--rate") && has) {
+            if (!parse_double(argv[++i], 0.0, 1000.0, &opt.rate)) return bad("0..1000");
+        } else if (!std::strcmp(a, "--budget-us") && has) {
+            if (!parse_long(argv[++i], 1, 100000000, &v)) return bad("1..100000000");
+            opt.budget_us = v;
+        } else if (!std::strcmp(a, "--budget-of") && has) {
+            const std::string w = argv[++i];
+            if (w != "e2e" && w != "node") return bad("e2e or node");
+            opt.budget_e2e = w == "e2e";
+        } else if (!std::strcmp(a, "--lcm-url") && has) {
+            lcm_url = argv[++i];
+        } else if (!std::strcmp(a, "--csv") && has) {
+            opt.csv = argv[++i];
+        } else if (!std::strcmp(a, "--png") && has) {
+            opt.png = argv[++i];
+        } else if (!std::strcmp(a, "--timeout-ms") && has) {
+            if (!parse_long(argv[++i], 1, 600000, &v)) return bad("1..600000");
+            opt.timeout_ms = v;
+        } else if (!std::strcmp(a, "--warmup") && has) {
+            if (!parse_long(argv[++i], 0, 10000000, &v)) return bad("0..10000000");
+            opt.warmup = v;
+        } else if (!std::strcmp(a, "--no-restamp")) {
+            opt.restamp = false;
+        } else {
+            std::fprintf(stderr, "sfd-hil: unknown or incomplete option: %s\n", a);
+            usage(stderr);
+            return 2;
+        }
+    }
+    if (opt.log_path.empty() == opt.sim.empty()) {
+        std::fprintf(stderr, "sfd-hil: give exactly one of --log IN.lcmlog and --sim SCENARIO\n");
+        return 2;
+    }
+    if (!opt.sim.empty() && !sfdsim::is_flight_scenario(opt.sim)) {
+        std::fprintf(stderr,
+                     "sfd-hil: --sim: unknown scenario %s (paper-uav, mistracking, "
+                     "moving-object, worst-case)\n",
+                     opt.sim.c_str());
+        return 2;
+    }
+    if (!config_path.empty() && !sfdapp::load_config(config_path, &cfg, &err)) {
+        std::fprintf(stderr, "sfd-hil: %s\n", err.c_str());
+        return 2;
+    }
+    if (!lcm_url.empty()) cfg.lcm_url = lcm_url;
+    if (!opt.log_path.empty()) {
+        FILE *f = std::fopen(opt.log_path.c_str(), "rb");
+        if (f == nullptr) {
+            std::fprintf(stderr, "sfd-hil: --log: cannot open %s\n", opt.log_path.c_str());
+            return 2;
+        }
+        std::fclose(f);
+    }
+    FILE *csv = nullptr;
+    if (!opt.csv.empty()) {
+        csv = std::fopen(opt.csv.c_str(), "w");
+        if (csv == nullptr) {
+            std::fprintf(stderr, "sfd-hil: --csv: cannot write %s\n", opt.csv.c_str());
+            return 2;
+        }
+    }
+    if (!opt.png.empty() && opt.csv.empty()) {
+        std::fprintf(stderr, "sfd-hil: --png needs --csv (the plot reads the CSV)\n");
+        return 2;
+    }
+    lcm_t *tx = lcm_create(cfg.lcm_url.c_str());
+    lcm_t *rx = tx != nullptr ? lcm_create(cfg.lcm_url.c_str()) : nullptr;
+    if (tx == nullptr || rx == nullptr) {
+        std::fprintf(stderr, "sfd-hil: --lcm-url %s: cannot create the LCM instance\n",
+                     cfg.lcm_url.c_str());
+        if (tx != nullptr) lcm_destroy(tx);
+        if (csv != nullptr) std::fclose(csv);
+        return 2;
+    }
+    lcm_subscribe(rx, cfg.channels.verdict.c_str(), on_verdict, nullptr);
+    lcm_subscribe(rx, cfg.channels.timing.c_str(), on_timing, nullptr);
+    if (opt.frames > 0 && !opt.sim.empty()) g.frames.reserve(static_cast<size_t>(opt.frames));
+    std::atomic<bool> rx_done(false);
+    std::thread receiver([&] {
+        while (!rx_done.load()) {
+            if (lcm_handle_timeout(rx, 20) < 0) break;
+        }
+    });
+    struct sigaction sa;
+    std::memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+    // Let the receive socket join the group before the first frame.
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+
+    std::string source;
+    char line[256];
+    if (!opt.sim.empty()) {
+        std::snprintf(line, sizeof line, "sim %s, %d frames, seed %llu", opt.sim.c_str(),
+                      opt.frames, static_cast<unsigned long long>(opt.seed));
+        source = line;
+    } else {
+        source = "log " + opt.log_path;
+    }
+    char rate[64];
+    if (opt.rate > 0) {
+        std::snprintf(rate, sizeof rate, "%g", opt.rate);
+    } else {
+        std::snprintf(rate, sizeof rate, "0 (closed loop)");
+    }
+    std::printf("sfd-hil: %s -> %s, rate %s, lcm %s\n", source.c_str(),
+                cfg.channels.features.c_str(), rate, cfg.lcm_url.c_str());
+    std::fflush(stdout);
+
+    Publisher pub(tx, cfg.channels, opt);
+    int input_rc = 0;
+    long events = 0;
+    sfdsim::FlightStats fst;
+    if (!opt.sim.empty()) {
+        sfdsim::FlightOptions fo;
+        fo.scenario = opt.sim;
+        fo.seed = opt.seed;
+        fo.frames = opt.frames;
+        fo.features =
+            opt.features > 0 ? opt.features : (opt.sim == "worst-case" ? SFD_MAX_FEATURES : 200);
+        fo.random_fraction = opt.random_fraction;
+        if (sfdsim::generate_flight(fo, pub, &fst) != 0) input_rc = 1;
+    } else {
+        input_rc = play_log(opt.log_path, pub, &events, &err);
+        if (input_rc != 0) std::fprintf(stderr, "sfd-hil: --log: %s\n", err.c_str());
+    }
+    // Outstanding verdicts and timings: until every frame has both, or the last publish is
+    // --timeout-ms old; a second signal ends the wait.
+    {
+        std::unique_lock<std::mutex> lk(g.mu);
+        const int64_t last_pub = g.frames.empty() ? mono_ns() : g.frames.back().pub_ns;
+        const int64_t deadline = last_pub + opt.timeout_ms * 1000000LL;
+        while (g_stop < 2) {
+            bool all = true;
+            for (const Frame &f : g.frames) all = all && f.verdict_ns >= 0 && f.timing;
+            const int64_t left = deadline - mono_ns();
+            if (all || left <= 0) break;
+            g.cv.wait_for(lk, std::chrono::nanoseconds(std::min<int64_t>(left, 50000000)));
+        }
+    }
+    rx_done.store(true);
+    receiver.join();
+    lcm_destroy(rx);
+    lcm_destroy(tx);
+
+    std::lock_guard<std::mutex> lk(g.mu);
+    const std::vector<Frame> &fr = g.frames;
+    const int64_t timeout_ns = opt.timeout_ms * 1000000LL;
+    long no_verdict = 0, late = 0, measured = 0, misses = 0, exhausted = 0, timed = 0;
+    long hyp_max = 0;
+    double hyp_sum = 0;
+    std::vector<double> e2e, node, lateness, period_err;
+    for (size_t i = 0; i < fr.size(); ++i) {
+        const Frame &f = fr[i];
+        const bool got = f.verdict_ns >= 0;
+        const bool in_time = got && f.verdict_ns - f.pub_ns <= timeout_ns;
+        if (!got) ++no_verdict;
+        if (got && !in_time) ++late;
+        if (opt.rate > 0) {
+            lateness.push_back(double(f.pub_ns - f.sched_ns) / 1000.0);
+            if (i > 0) {
+                period_err.push_back(
+                    double((f.pub_ns - fr[i - 1].pub_ns) - (f.sched_ns - fr[i - 1].sched_ns)) /
+                    1000.0);
+            }
+        }
+        if (long(i) < opt.warmup || !in_time) continue;
+        ++measured;
+        const double e = double(f.verdict_ns - f.pub_ns) / 1000.0;
+        e2e.push_back(e);
+        if (f.timing) {
+            ++timed;
+            node.push_back(double(f.total_us));
+            exhausted += f.budget_exhausted ? 1 : 0;
+            hyp_sum += f.hypotheses;
+            hyp_max = std::max<long>(hyp_max, f.hypotheses);
+        }
+        if (opt.budget_us > 0) {
+            const double x = opt.budget_e2e ? e : (f.timing ? double(f.total_us) : 0.0);
+            if (x > double(opt.budget_us)) ++misses;
+        }
+    }
+    // Node-side drops during the run (SFD_TIMING rejected[], last minus first received): inputs
+    // the node discarded. DEPTH (a missing depth prior replaced), IMU_GAP / IMU_LATE (frames
+    // judged UNTESTED), IMU_OVERFLOW (the IMU ring wrapping: the oldest sample, long consumed,
+    // overwritten) and CORE are shown but are not message losses.
+    long node_drops = 0;
+    std::string rej_line;
+    for (int k = 0; k < SFD_TIMING_T_NUM_REASONS; ++k) {
+        const int64_t d = g.last_rejected[k] - g.first_rejected[k];
+        const bool loss = k == SFD_TIMING_T_REJECT_DECODE || k == SFD_TIMING_T_REJECT_COUNT ||
+                          k == SFD_TIMING_T_REJECT_NONFINITE || k == SFD_TIMING_T_REJECT_ORDER ||
+                          k == SFD_TIMING_T_REJECT_CAMERA_ID ||
+                          k == SFD_TIMING_T_REJECT_NO_CAMERA_INFO ||
+                          k == SFD_TIMING_T_REJECT_CAPACITY;
+        if (loss) node_drops += d;
+        if (d != 0 || g.last_rejected[k] != 0) {
+            rej_line += std::string(" ") + sfd_reject_reason_str(k) + "=" + std::to_string(d) +
+                        "(" + std::to_string(g.last_rejected[k]) + ")";
+        }
+    }
+    const long lost = no_verdict + late + g.unknown_verdicts + node_drops;
+    const Stats se = stats_of(e2e), sn = stats_of(node), sl = stats_of(lateness),
+                sp = stats_of(period_err);
+
+    std::printf("\n| sfd-hil | %s, rate %s, timeout %ld ms, warm-up %ld |\n", source.c_str(), rate,
+                opt.timeout_ms, opt.warmup);
+    std::printf("| --- | --- |\n");
+    std::printf("| frames published | %zu (%ld messages) |\n", fr.size(), pub.published());
+    std::printf("| verdicts received | %ld |\n", g.verdicts);
+    std::printf("| timing received | %ld |\n", g.timings);
+    std::printf("| lost: frames without verdict within %ld ms | %ld (%ld late) |\n", opt.timeout_ms,
+                no_verdict + late, late);
+    std::printf("| lost: verdicts for unknown frames | %ld |\n", g.unknown_verdicts);
+    std::printf("| lost: node-side drops (SFD_TIMING rejected[]) | %ld |\n", node_drops);
+    std::printf("| node rejected[] during run (since node start) |%s |\n",
+                rej_line.empty() ? " none" : rej_line.c_str());
+    if (pub.malformed() > 0 || pub.publish_failures() > 0) {
+        std::printf("| input FEATURES skipped (malformed) / publish failures | %ld / %ld |\n",
+                    pub.malformed(), pub.publish_failures());
+    }
+    std::printf("| frames measured (after warm-up, verdict in time) | %ld (%ld with timing) |\n",
+                measured, timed);
+    std::printf("\n| latency (us) | min | median | p99 | p99.9 | max | mean | std |\n");
+    std::printf("| --- | --- | --- | --- | --- | --- | --- | --- |\n");
+    auto row = [](const char *name, const Stats &s) {
+        if (s.n == 0) {
+            std::printf("| %s | - | - | - | - | - | - | - |\n", name);
+        } else {
+            std::printf("| %s | %.0f | %.0f | %.0f | %.0f | %.0f | %.1f | %.1f |\n", name, s.min,
+                        s.median, s.p99, s.p999, s.max, s.mean, s.sd);
+        }
+    };
+    row("end-to-end", se);
+    row("node total_us", sn);
+    std::printf("\n| jitter | value |\n| --- | --- |\n");
+    std::printf("| end-to-end: std / p99 - median | %.1f / %.0f us |\n", se.sd, se.p99 - se.median);
+    if (opt.rate > 0) {
+        std::printf("| pacing: publish lateness median / p99 / max | %.0f / %.0f / %.0f us |\n",
+                    sl.median, sl.p99, sl.max);
+        std::printf("| pacing: frame period error std / max abs | %.1f / %.0f us |\n", sp.sd,
+                    std::max(std::fabs(sp.min), std::fabs(sp.max)));
+    } else {
+        std::printf("| pacing | closed loop (no schedule) |\n");
+    }
+    std::printf("\n| workload | value |\n| --- | --- |\n");
+    std::printf("| hypotheses per frame mean / max | %.1f / %ld |\n",
+                timed ? hyp_sum / double(timed) : 0.0, hyp_max);
+    std::printf("| frames with budget_exhausted | %ld of %ld |\n", exhausted, timed);
+    if (opt.budget_us > 0) {
+        std::printf("| deadline misses (%s > %ld us) | %ld of %ld |\n",
+                    opt.budget_e2e ? "end-to-end" : "node total_us", opt.budget_us, misses,
+                    measured);
+    } else {
+        std::printf("| deadline misses | no --budget-us |\n");
+    }
+    const bool fail = lost > 0 || misses > 0 || fr.empty();
+    const bool input_error = input_rc == 2 || (!opt.log_path.empty() && fr.empty());
+    std::printf("| result | %s%s |\n",
+                input_error     ? "input error (exit 2)"
+                : input_rc == 1 ? "internal failure (exit 1)"
+                : fail          ? "FAIL (exit 3)"
+                                : "ok",
+                g_stop ? ", interrupted" : "");
+    std::fflush(stdout);
+
+    int rc = fail ? 3 : 0;
+    if (csv != nullptr) {
+        std::fprintf(csv,
+                     "frame,utime,features,sched_lateness_us,e2e_us,node_total_us,ingest_us,"
+                     "parity_us,association_us,update_us,hypotheses,budget_exhausted,verdict,"
+                     "timing,warmup,lost\n");
+        for (size_t i = 0; i < fr.size(); ++i) {
+            const Frame &f = fr[i];
+            const bool got = f.verdict_ns >= 0;
+            const bool in_time = got && f.verdict_ns - f.pub_ns <= timeout_ns;
+            std::fprintf(csv, "%zu,%lld,%d,", i, static_cast<long long>(f.utime), f.features);
+            if (opt.rate > 0) {
+                std::fprintf(csv, "%.1f,", double(f.pub_ns - f.sched_ns) / 1000.0);
+            } else {
+                std::fprintf(csv, ",");
+            }
+            if (got) {
+                std::fprintf(csv, "%.1f,", double(f.verdict_ns - f.pub_ns) / 1000.0);
+            } else {
+                std::fprintf(csv, ",");
+            }
+            if (f.timing) {
+                std::fprintf(csv, "%d,%d,%d,%d,%d,%d,%d,", f.total_us, f.ingest_us, f.parity_us,
+                             f.association_us, f.update_us, f.hypotheses, f.budget_exhausted);
+            } else {
+                std::fprintf(csv, ",,,,,,,");
+            }
+            std::fprintf(csv, "%d,%d,%d,%d\n", got ? 1 : 0, f.timing ? 1 : 0,
+                         long(i) < opt.warmup ? 1 : 0, in_time ? 0 : 1);
+        }
+        if (std::fclose(csv) != 0) {
+            std::fprintf(stderr, "sfd-hil: --csv: writing %s failed\n", opt.csv.c_str());
+            return 1;
+        }
+        if (!opt.png.empty() && run_plot(opt.csv, opt.png) != 0 && rc == 0) rc = 1;
+    }
+    if (input_error) {
+        if (input_rc == 0) {
+            std::fprintf(stderr, "sfd-hil: --log: %s has no FEATURES frame\n",
+                         opt.log_path.c_str());
+        }
+        return 2;
+    }
+    if (input_rc == 1) {
+        std::fprintf(stderr, "sfd-hil: --sim: a message could not be encoded\n");
+        return 1;
+    }
+    (void)events;
+    (void)fst;
+    return rc;
+}

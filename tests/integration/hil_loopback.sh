@@ -1,0 +1,131 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# integration.hil_loopback: sfd-hil against a running sfd-node over real LCM (UDP multicast,
+# ttl=0, its own group and port), inside a private network namespace (unshare -n) whose only
+# interface is loopback with a multicast route. Each run gets a fresh node (sfd-hil's restamped
+# utimes run ahead of the wall clock at --rate 0 or > 1, so a node kept between runs would
+# reject the next run's messages as out of order). --timeout-ms 200 (a frame's round trip takes
+# a few ms) keeps a node that does not answer from stalling the closed loop. Checks:
+#  1. --sim mistracking, 300 frames, --rate 0 (closed loop): exit 0, verdicts == timing ==
+#     frames == 300, nothing lost, 300 CSV rows, the node's stop report counts 300 frames;
+#  2. the same at --rate 4 (paced, 150 frames): exit 0, nothing lost, 150 CSV rows;
+#  3. an impossible --budget-us 1: exit 3, every measured frame a deadline miss;
+#  4. no node: every frame times out: exit 3, all frames lost;
+#  5. usage and input errors: exit 2 (no source, unknown scenario, unreadable log, a file that
+#     is not an LCM log).
+# usage: hil_loopback.sh BUILD_DIR
+set -euo pipefail
+build="$1"
+if ! unshare -n true 2>/dev/null; then
+  echo "hil_loopback: 'unshare -n' is not permitted here (needs root or user namespaces)" >&2
+  exit 1
+fi
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+hil="$build/apps/sfd-hil"
+
+# 5. usage and input errors (no LCM needed).
+expect_rc() {  # expected-rc description command...
+  local want="$1" what="$2"; shift 2
+  local rc=0
+  "$@" > "$tmp/out.txt" 2>&1 || rc=$?
+  if [ "$rc" -ne "$want" ]; then
+    cat "$tmp/out.txt"; echo "hil_loopback: $what: exit $rc, expected $want"; exit 1
+  fi
+  echo "ok: $what -> exit $rc: $(grep -m1 'sfd-hil:' "$tmp/out.txt" || true)"
+}
+expect_rc 2 "no source" "$hil"
+expect_rc 2 "unknown scenario" "$hil" --sim nowhere
+expect_rc 2 "--log and --sim together" "$hil" --sim mistracking --log "$tmp/x.lcmlog"
+expect_rc 2 "bad --rate" "$hil" --sim mistracking --rate fast
+head -c 5000 /dev/urandom > "$tmp/garbage.lcmlog"
+expect_rc 2 "unreadable log" "$hil" --log "$tmp/missing.lcmlog"
+
+export SFD_BUILD="$build" SFD_TMP="$tmp"
+unshare -n bash -euo pipefail <<'NS'
+ip link set lo up
+ip link set lo multicast on
+ip route add 224.0.0.0/4 dev lo
+url="udpm://239.255.76.71:7671?ttl=0"
+hil="$SFD_BUILD/apps/sfd-hil"
+start_node() {
+  "$SFD_BUILD/apps/sfd-node" --lcm-url "$url" > "$SFD_TMP/node_$1.txt" 2>&1 &
+  node=$!
+  sleep 0.5
+}
+stop_node() {
+  kill -INT "$node"
+  local rc=0; wait "$node" || rc=$?
+  [ "$rc" -eq 0 ] || { cat "$SFD_TMP/node_$1.txt"; echo "sfd-node exited $rc on SIGINT"; exit 1; }
+}
+field() {  # the value column of a report row starting with "| $1"
+  grep -m1 "^| $1" "$2" | awk -F'|' '{print $3}' | awk '{print $1}'
+}
+check_clean_run() {  # name frames
+  local out="$SFD_TMP/$1.txt" n="$2"
+  cat "$out"
+  [ "$(field 'frames published' "$out")" = "$n" ] || { echo "$1: frames published != $n"; exit 1; }
+  [ "$(field 'verdicts received' "$out")" = "$n" ] || { echo "$1: verdicts != $n"; exit 1; }
+  [ "$(field 'timing received' "$out")" = "$n" ] || { echo "$1: timing != $n"; exit 1; }
+  [ "$(field 'lost: frames without verdict' "$out")" = "0" ] || { echo "$1: frames lost"; exit 1; }
+  [ "$(field 'lost: verdicts for unknown' "$out")" = "0" ] || { echo "$1: unknown verdicts"; exit 1; }
+  [ "$(field 'lost: node-side drops' "$out")" = "0" ] || { echo "$1: node-side drops"; exit 1; }
+  local rows; rows=$(($(wc -l < "$SFD_TMP/$1.csv") - 1))
+  [ "$rows" -eq "$n" ] || { echo "$1: $rows CSV rows, expected $n"; exit 1; }
+  # every row: a verdict, a timing, not lost
+  awk -F, -v name="$1" 'NR > 1 && ($13 != 1 || $14 != 1 || $16 != 0) {
+      print name ": CSV row " NR - 1 " not a clean frame: " $0; bad = 1 } END { exit bad }' \
+      "$SFD_TMP/$1.csv"
+}
+
+# 1. closed loop
+start_node rate0
+rc=0
+"$hil" --sim mistracking --frames 300 --rate 0 --timeout-ms 200 --lcm-url "$url" --csv "$SFD_TMP/rate0.csv" \
+  > "$SFD_TMP/rate0.txt" 2>&1 || rc=$?
+stop_node rate0
+[ "$rc" -eq 0 ] || { cat "$SFD_TMP/rate0.txt"; echo "rate 0: exit $rc, expected 0"; exit 1; }
+check_clean_run rate0 300
+grep -q "stopped: 300 frames in, 300 processed" "$SFD_TMP/node_rate0.txt" || {
+  cat "$SFD_TMP/node_rate0.txt"; echo "rate 0: the node did not process 300 frames"; exit 1; }
+
+# 2. paced, 4x the recorded pace
+start_node rate4
+rc=0
+"$hil" --sim mistracking --frames 150 --rate 4 --timeout-ms 200 --lcm-url "$url" --csv "$SFD_TMP/rate4.csv" \
+  > "$SFD_TMP/rate4.txt" 2>&1 || rc=$?
+stop_node rate4
+[ "$rc" -eq 0 ] || { cat "$SFD_TMP/rate4.txt"; echo "rate 4: exit $rc, expected 0"; exit 1; }
+check_clean_run rate4 150
+grep -q "pacing: publish lateness" "$SFD_TMP/rate4.txt" || { echo "rate 4: no pacing row"; exit 1; }
+
+# 3. an impossible budget: every measured frame misses it, exit 3
+start_node budget
+rc=0
+"$hil" --sim mistracking --frames 60 --rate 0 --budget-us 1 --timeout-ms 200 --lcm-url "$url" \
+  > "$SFD_TMP/budget.txt" 2>&1 || rc=$?
+stop_node budget
+cat "$SFD_TMP/budget.txt"
+[ "$rc" -eq 3 ] || { echo "budget 1 us: exit $rc, expected 3"; exit 1; }
+grep -q "^| deadline misses (node total_us > 1 us) | 50 of 50 |" "$SFD_TMP/budget.txt" || {
+  echo "budget 1 us: expected 50 of 50 measured frames (60 - 10 warm-up) to miss"; exit 1; }
+
+# 4. no node: every frame times out, exit 3
+rc=0
+"$hil" --sim mistracking --frames 20 --rate 0 --timeout-ms 50 --lcm-url "$url" \
+  > "$SFD_TMP/nonode.txt" 2>&1 || rc=$?
+cat "$SFD_TMP/nonode.txt"
+[ "$rc" -eq 3 ] || { echo "no node: exit $rc, expected 3"; exit 1; }
+[ "$(field 'verdicts received' "$SFD_TMP/nonode.txt")" = "0" ] || { echo "no node: verdicts?"; exit 1; }
+[ "$(field 'lost: frames without verdict' "$SFD_TMP/nonode.txt")" = "20" ] || {
+  echo "no node: expected 20 lost frames"; exit 1; }
+
+# A file that is not an LCM log: exit 2 with the reason, no crash.
+rc=0
+"$hil" --log "$SFD_TMP/garbage.lcmlog" --rate 0 --timeout-ms 50 --lcm-url "$url" \
+  > "$SFD_TMP/garbage.txt" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] && grep -q "not an LCM log event" "$SFD_TMP/garbage.txt" || {
+  cat "$SFD_TMP/garbage.txt"; echo "garbage log: exit $rc, expected 2 with a reason"; exit 1; }
+echo "ok: garbage log -> exit 2: $(grep -m1 'not an LCM' "$SFD_TMP/garbage.txt")"
+NS
+echo "hil_loopback: all checks passed"
