@@ -487,6 +487,20 @@ extern "C" sfd_status_t sfd_parity_reset(sfd_parity_t *det) {
     return SFD_OK;
 }
 
+extern "C" sfd_status_t sfd_parity_newest_xn(const sfd_parity_t *det, int64_t utime, int32_t index,
+                                             double xn[2]) {
+    if (det == nullptr || xn == nullptr) return SFD_ERR_INVAL;
+    if (det->magic_ != kMagic) return SFD_ERR_STATE;
+    if (det->count == 0) return SFD_ERR_INVAL;
+    const sfd_parity_frame_t &fr = det->frames[det->head];
+    if (fr.utime != utime || index < 0 || index >= fr.num || !fr.obs[index].valid) {
+        return SFD_ERR_INVAL;
+    }
+    xn[0] = fr.obs[index].xn[0];
+    xn[1] = fr.obs[index].xn[1];
+    return SFD_OK;
+}
+
 extern "C" sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
                                               const sfd_frame_motion_t *motion,
                                               sfd_verdict_t *out) {

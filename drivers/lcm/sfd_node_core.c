@@ -236,7 +236,10 @@ static void process_frame(sfd_node_t *n, const sfd_frame_t *frame, int64_t inges
             n->skip[i] = (uint8_t)((method == SFD_METHOD_PARITY && ps != SFD_VERDICT_CONSISTENT) ||
                                    (method == SFD_METHOD_BOTH && ps == SFD_VERDICT_SPURIOUS));
         }
-        const int32_t nm = sfd_nav_build(&n->nav, &n->camera, frame, n->skip);
+        /* parity undistorted this frame's features with the same camera: reuse them */
+        const int parity_ran = method == SFD_METHOD_PARITY || method == SFD_METHOD_BOTH;
+        const int32_t nm =
+            sfd_nav_build(&n->nav, &n->camera, frame, n->skip, parity_ran ? &n->parity : NULL);
         sfd_nav_t *nv = &n->nav;
         const sfd_status_t s1 =
             sfd_assoc_select(&nv->assoc, &nv->ekf, &nv->ekf_cam, nv->prev_R_CtoW, nv->prev_p_CinW_m,

@@ -183,13 +183,52 @@ int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
     return SFD_REJECT_NONE;
 }
 
+/* The previous frame's track index: open addressing with linear probing over
+ * SFD_NAV_TRACK_SLOTS (more than twice SFD_MAX_FEATURES, so a probe sequence always ends at an
+ * empty slot). Holds the first index of each id, as a front-to-back search of prev_track would
+ * find it. */
+static int32_t track_slot(int64_t id) {
+    const uint64_t h = (uint64_t)id * 0x9E3779B97F4A7C15ULL;
+    return (int32_t)((h >> 17) % (uint64_t)SFD_NAV_TRACK_SLOTS);
+}
+
+static void prev_index_build(sfd_nav_t *nav) {
+    for (int32_t s = 0; s < SFD_NAV_TRACK_SLOTS; ++s) nav->prev_index[s] = -1;
+    for (int32_t k = 0; k < nav->prev_n; ++k) {
+        int32_t s = track_slot(nav->prev_track[k]);
+        for (int32_t probe = 0; probe < SFD_NAV_TRACK_SLOTS; ++probe) {
+            const int16_t v = nav->prev_index[s];
+            if (v < 0) {
+                nav->prev_index[s] = (int16_t)k;
+                break;
+            }
+            if (nav->prev_track[v] == nav->prev_track[k]) break; /* keep the first */
+            s = (s + 1 == SFD_NAV_TRACK_SLOTS) ? 0 : s + 1;
+        }
+    }
+}
+
+/* Index of @p id in the previous frame (its first occurrence), or -1. */
+static int32_t prev_index_find(const sfd_nav_t *nav, int64_t id) {
+    int32_t s = track_slot(id);
+    for (int32_t probe = 0; probe < SFD_NAV_TRACK_SLOTS; ++probe) {
+        const int16_t v = nav->prev_index[s];
+        if (v < 0 || v >= nav->prev_n) return -1;
+        if (nav->prev_track[v] == id) return v;
+        s = (s + 1 == SFD_NAV_TRACK_SLOTS) ? 0 : s + 1;
+    }
+    return -1;
+}
+
 int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *frame,
-                      const uint8_t *skip) {
+                      const uint8_t *skip, const sfd_parity_t *parity) {
     nav->num_matches = 0;
     for (int32_t i = 0; i < frame->num_features; ++i) {
         nav->feature_match[i] = -1;
         const double uv_raw[2] = {frame->features[i].u_px, frame->features[i].v_px};
-        nav->ok[i] = (uint8_t)(sfd_camera_undistort(cam, uv_raw, nav->xn[i], NULL) == SFD_OK);
+        nav->ok[i] = (uint8_t)((parity != NULL && sfd_parity_newest_xn(parity, frame->utime, i,
+                                                                       nav->xn[i]) == SFD_OK) ||
+                               sfd_camera_undistort(cam, uv_raw, nav->xn[i], NULL) == SFD_OK);
         nav->uv[i][0] = cam->fx_px * nav->xn[i][0] + cam->cx_px;
         nav->uv[i][1] = cam->fy_px * nav->xn[i][1] + cam->cy_px;
     }
@@ -197,13 +236,7 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
     for (int32_t i = 0; i < frame->num_features; ++i) {
         if (!nav->ok[i] || (skip != NULL && skip[i])) continue;
         const int64_t id = frame->features[i].track_id;
-        int32_t p = -1;
-        for (int32_t k = 0; k < nav->prev_n; ++k) { /* bounded: <= SFD_MAX_FEATURES */
-            if (nav->prev_track[k] == id) {
-                p = k;
-                break;
-            }
-        }
+        const int32_t p = prev_index_find(nav, id);
         if (p < 0) continue;
         const int32_t li = sfd_landmark_find(&nav->map, id);
         if (li < 0) continue;
@@ -266,6 +299,7 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *stat
         nav->prev_uv[nav->prev_n][1] = nav->uv[i][1];
         nav->prev_n++;
     }
+    prev_index_build(nav);
     memcpy(nav->prev_R_CtoW, R_CtoW, sizeof R_CtoW);
     memcpy(nav->prev_p_CinW_m, p_C, sizeof p_C);
     nav->have_prev = 1;

@@ -23,6 +23,9 @@
 
 #include "sfd_imu_ring.h"
 
+/** Slots of the previous frame's track index (load factor <= 1/2). */
+#define SFD_NAV_TRACK_SLOTS (2 * SFD_MAX_FEATURES + 1)
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -83,6 +86,8 @@ typedef struct {
     int32_t prev_n;
     int64_t prev_track[SFD_MAX_FEATURES];
     double prev_uv[SFD_MAX_FEATURES][2];
+    /** track id -> first index in prev_track (open addressing, -1 empty), built with prev_track */
+    int16_t prev_index[SFD_NAV_TRACK_SLOTS];
     double prev_R_CtoW[9];
     double prev_p_CinW_m[3];
     int32_t have_prev;
@@ -123,10 +128,13 @@ void sfd_nav_truth(sfd_nav_t *nav, int64_t utime, const double p_m[3], const dou
  * @brief Matches of the frame: features (not excluded by @p skip, nullable) whose track was in
  *        the previous frame and has a landmark. Fills nav->matches / match_feature /
  *        feature_match; undistorts every feature with @p cam.
+ * @param parity nullable: a detector that has just judged this frame with the same camera; the
+ *        coordinates it computed are taken from it (sfd_parity_newest_xn(), bit-identical), and
+ *        only the features it rejected are undistorted again.
  * @return the number of matches.
  */
 int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *frame,
-                      const uint8_t *skip);
+                      const uint8_t *skip, const sfd_parity_t *parity);
 
 /**
  * @brief After the association: refines the landmarks of the features judged CONSISTENT with

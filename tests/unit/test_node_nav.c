@@ -51,10 +51,76 @@ static void nav_init_nonfinite_accel_bias_refused(void **state) {
     assert_status(sfd_nav_init(&g_nav, &cfg, &params), SFD_ERR_INVAL);
 }
 
+/* GIVEN a started filter and a frame whose track 5 appears twice (a tracker fault) WHEN the
+ *      next frame is matched against it
+ * THEN each track finds its first occurrence in the previous frame (as a front-to-back search
+ *      would), tracks absent from the previous frame get no match, and a previous track lost
+ *      among many others is still found (the track index of the previous frame). */
+static void nav_build_matches_first_occurrence_of_previous_tracks(void **state) {
+    (void)state;
+    sfd_nav_config_t cfg;
+    sfd_nav_config_default(&cfg);
+    cfg.init_from_truth = 1;
+    sfd_params_t params;
+    sfd_params_default(&params);
+    assert_status(sfd_nav_init(&g_nav, &cfg, &params), SFD_OK);
+    sfd_camera_t cam;
+    const double dist[5] = {0, 0, 0, 0, 0};
+    assert_status(sfd_camera_init(&cam, SFD_DISTORTION_PINHOLE, 640, 480, 400, 400, 320, 240, dist),
+                  SFD_OK);
+    sfd_extrinsics_t ext;
+    memset(&ext, 0, sizeof ext);
+    ext.R_CtoI[0] = ext.R_CtoI[4] = ext.R_CtoI[8] = 1.0;
+    sfd_nav_set_camera(&g_nav, &cam, &ext);
+    const double q[4] = {1, 0, 0, 0}, p0[3] = {0, 0, 0}, p1[3] = {0.01, 0, 0};
+    sfd_nav_truth(&g_nav, 1000000, p0, q);
+    sfd_nav_truth(&g_nav, 1050000, p1, q);
+    assert_int_equal(g_nav.ready, 1);
+
+    static sfd_frame_t a, b;
+    memset(&a, 0, sizeof a);
+    a.utime = 1050000;
+    a.num_features = 200;
+    for (int i = 0; i < a.num_features; ++i) {
+        a.features[i].track_id = 1000 + i;
+        a.features[i].u_px = 20.0 + (double)(i % 20) * 30.0;
+        a.features[i].v_px = 20.0 + (double)(i / 20) * 40.0;
+    }
+    a.features[3].track_id = 5;
+    a.features[150].track_id = 5; /* repeated: the first (index 3) must be the one matched */
+    a.features[199].track_id = 9;
+    int8_t status[SFD_MAX_FEATURES];
+    for (int i = 0; i < a.num_features; ++i) status[i] = SFD_VERDICT_CONSISTENT;
+    assert_int_equal(sfd_nav_build(&g_nav, &cam, &a, NULL, NULL), 0); /* no previous frame */
+    sfd_nav_finish(&g_nav, &a, status);
+    assert_int_equal(g_nav.prev_n, 200);
+
+    memset(&b, 0, sizeof b);
+    b.utime = 1100000;
+    b.num_features = 3;
+    b.features[0].track_id = 9;
+    b.features[1].track_id = 77; /* new track */
+    b.features[2].track_id = 5;
+    for (int i = 0; i < b.num_features; ++i) {
+        b.features[i].u_px = 300.0 + i;
+        b.features[i].v_px = 200.0;
+    }
+    const int32_t nm = sfd_nav_build(&g_nav, &cam, &b, NULL, NULL);
+    assert_int_equal(nm, 2);
+    assert_int_equal(g_nav.feature_match[1], -1);
+    const sfd_match_t *m9 = &g_nav.matches[g_nav.feature_match[0]];
+    const sfd_match_t *m5 = &g_nav.matches[g_nav.feature_match[2]];
+    assert_near(m9->prev_uv_px[0], a.features[199].u_px, 1e-9);
+    assert_near(m9->prev_uv_px[1], a.features[199].v_px, 1e-9);
+    assert_near(m5->prev_uv_px[0], a.features[3].u_px, 1e-9);
+    assert_near(m5->prev_uv_px[1], a.features[3].v_px, 1e-9);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(nav_truth_start_takes_configured_biases),
         cmocka_unit_test(nav_init_nonfinite_accel_bias_refused),
+        cmocka_unit_test(nav_build_matches_first_occurrence_of_previous_tracks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -344,6 +344,51 @@ static void detector_rank_drop_uses_true_dof(void **state) {
     assert_true(fabs(p - 0.05) <= half);
 }
 
+/* GIVEN a pushed frame with one non-finite and one repeated track WHEN asking for the newest
+ * frame's normalized coordinates THEN valid features give exactly sfd_camera_undistort's result,
+ * rejected ones, other frame times, indices outside the frame and a reset window give
+ * SFD_ERR_INVAL and leave the output untouched. */
+static void detector_newest_xn_equals_undistort(void **state) {
+    (void)state;
+    SFD_REQ("SFD-PAR-018");
+    scene_init(&g_scene, 7, 30, 1.0);
+    init_det(0, 1, 0.01);
+    sfd_frame_motion_t mo;
+    double xn[2] = {0.0, 0.0};
+    assert_status(sfd_parity_newest_xn(&g_det, 0, 0, xn), SFD_ERR_INVAL); /* empty window */
+    for (int f = 0; f < 2; ++f) {
+        scene_step(&g_scene, &g_frame, &mo, 0.0);
+        if (f == 1) {
+            g_frame.features[3].u_px = NAN;
+            g_frame.features[5].track_id = g_frame.features[4].track_id;
+        }
+        assert_status(sfd_parity_push_frame(&g_det, &g_frame, &mo, &g_out), SFD_OK);
+    }
+    for (int i = 0; i < g_frame.num_features; ++i) {
+        const double sentinel[2] = {-7.0, 7.0};
+        memcpy(xn, sentinel, sizeof xn);
+        const sfd_status_t st = sfd_parity_newest_xn(&g_det, g_frame.utime, i, xn);
+        if (i == 3 || i == 5) {
+            assert_status(st, SFD_ERR_INVAL);
+            assert_memory_equal(xn, sentinel, sizeof xn);
+            continue;
+        }
+        assert_status(st, SFD_OK);
+        double ref[2];
+        const double uv[2] = {g_frame.features[i].u_px, g_frame.features[i].v_px};
+        assert_status(sfd_camera_undistort(&g_scene.cam, uv, ref, NULL), SFD_OK);
+        assert_memory_equal(xn, ref, sizeof ref);
+    }
+    assert_status(sfd_parity_newest_xn(&g_det, g_frame.utime - 1, 0, xn), SFD_ERR_INVAL);
+    assert_status(sfd_parity_newest_xn(&g_det, g_frame.utime, -1, xn), SFD_ERR_INVAL);
+    assert_status(sfd_parity_newest_xn(&g_det, g_frame.utime, g_frame.num_features, xn),
+                  SFD_ERR_INVAL);
+    assert_status(sfd_parity_newest_xn(NULL, g_frame.utime, 0, xn), SFD_ERR_INVAL);
+    assert_status(sfd_parity_newest_xn(&g_det, g_frame.utime, 0, NULL), SFD_ERR_INVAL);
+    assert_status(sfd_parity_reset(&g_det), SFD_OK);
+    assert_status(sfd_parity_newest_xn(&g_det, g_frame.utime, 0, xn), SFD_ERR_INVAL);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(detector_window_fills_before_testing),
@@ -353,6 +398,7 @@ int main(void) {
         cmocka_unit_test(detector_bad_inputs_reported_window_unchanged),
         cmocka_unit_test(detector_deterministic_and_resettable),
         cmocka_unit_test(detector_rank_drop_uses_true_dof),
+        cmocka_unit_test(detector_newest_xn_equals_undistort),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -245,6 +245,20 @@ sfd_status_t sfd_parity_init(sfd_parity_t *det, const sfd_params_t *params,
 sfd_status_t sfd_parity_reset(sfd_parity_t *det);
 
 /**
+ * @brief Undistorted normalized coordinates of feature @p index of the newest frame, as
+ *        sfd_parity_push_frame() computed them with sfd_camera_undistort() and the detector's
+ *        camera (bit-identical to calling it again), so that a caller working on the same frame
+ *        with the same camera need not undistort twice.
+ * @param utime the frame the caller means: must be the newest frame's time.
+ * @return SFD_OK with @p xn filled; SFD_ERR_INVAL for null arguments, an index outside the newest
+ *         frame, a different @p utime, an empty window, or a feature the frame rejected at
+ *         ingest (not finite, not undistortable, or a repeated track id): @p xn untouched;
+ *         SFD_ERR_STATE if not initialized.
+ */
+sfd_status_t sfd_parity_newest_xn(const sfd_parity_t *det, int64_t utime, int32_t index,
+                                  double xn[2]);
+
+/**
  * @brief Adds a frame to the window and judges every feature of it.
  *
  * Features tracked through all L frames of the window are tested; the others are UNTESTED with
