@@ -2,6 +2,8 @@
 // Landmark map: fixed-capacity table of 3-D landmarks keyed by track id, initialized from a ray
 // and a depth prior and refined by a gated, iterated 3x3 EKF update.
 // Derivations: core/docs/landmark_map.md.
+#include <cstring>
+
 #include "core_private.hpp"
 #include "ekf.hpp"
 #include "rotation.hpp"
@@ -133,6 +135,45 @@ bool rotation_arg(const double *R9, Mat3 *R) {
     return is_rotation(*R, kRotTol);
 }
 
+/// True when the n doubles have the same bits (a cache key test: -0.0 and 0.0 differ, and a NaN
+/// never gets that far, it fails validation and is never stored).
+bool same_bits(const double *a, const double *b, int n) {
+    uint64_t diff = 0;
+    for (int i = 0; i < n; ++i) {
+        uint64_t x = 0;
+        uint64_t y = 0;
+        std::memcpy(&x, a + i, sizeof x);
+        std::memcpy(&y, b + i, sizeof y);
+        diff |= x ^ y;
+    }
+    return diff == 0;
+}
+
+/// The camera pose arguments of init_from_ray and refine checked (a rotation, a finite position,
+/// a finite covariance with a non-negative diagonal, or none) and loaded: R, and the symmetric
+/// part of the covariance (zero without one). A frame's landmarks share one pose, so the last
+/// pose that passed is kept in the map with its bits: the same bits again skip the checks, with
+/// the result checking again would give. A pose that fails is never kept.
+bool pose_args(sfd_landmark_map_t *map, const double *R9, const double *p3, const double *cov36,
+               Mat3 *R, Mat6 *Cpose) {
+    const int32_t state = (cov36 != nullptr) ? 2 : 1;
+    double *key = map->pose_key_;
+    if (map->pose_key_state_ == state && same_bits(key, R9, 9) && same_bits(key + 9, p3, 3) &&
+        (cov36 == nullptr || same_bits(key + 12, cov36, 36))) {
+        *R = Eigen::Map<const Mat3>(R9);
+        *Cpose = Eigen::Map<const Mat6>(map->pose_cov_sym_);
+        return true;
+    }
+    if (!rotation_arg(R9, R) || !all_finite(p3, 3) || !pose_cov_valid(cov36)) return false;
+    *Cpose = (cov36 != nullptr) ? load_pose_cov(cov36) : Mat6::Zero();
+    std::memcpy(key, R9, 9 * sizeof(double));
+    std::memcpy(key + 9, p3, 3 * sizeof(double));
+    if (cov36 != nullptr) std::memcpy(key + 12, cov36, 36 * sizeof(double));
+    Eigen::Map<Mat6>(map->pose_cov_sym_) = *Cpose;
+    map->pose_key_state_ = state;
+    return true;
+}
+
 /// Symmetrized copy.
 Mat3 sym(const Mat3 &P) {
     return 0.5 * (P + P.transpose());
@@ -245,8 +286,8 @@ extern "C" sfd_status_t sfd_landmark_init_from_ray(sfd_landmark_map_t *map, int6
     }
     if (map->initialized != 1) return SFD_ERR_STATE;
     Mat3 R;
-    if (!rotation_arg(R_CtoW, &R) || !all_finite(p_CinW_m, 3) || !all_finite(xn, 2) ||
-        !pose_cov_valid(cov_pose6)) {
+    Mat6 Cp;
+    if (!all_finite(xn, 2) || !pose_args(map, R_CtoW, p_CinW_m, cov_pose6, &R, &Cp)) {
         return SFD_ERR_INVAL;
     }
     if (!std::isfinite(depth_m) || !(depth_m > 0.0) || !std::isfinite(depth_var_m2) ||
@@ -270,7 +311,6 @@ extern "C" sfd_status_t sfd_landmark_init_from_ray(sfd_landmark_map_t *map, int6
     if (cov_pose6 != nullptr) {
         // p_W = p_C + dp + d R Exp(dtheta) r ~ p_W + dp - d R [r]x dtheta: first order J C J^T,
         // plus sd2 (R [r]x) C_theta (R [r]x)^T for the depth-rotation product (as above).
-        const Mat6 Cp = load_pose_cov(cov_pose6);
         const Mat3 Rrx = R * skew(r);
         Mat36 J;
         J.block<3, 3>(0, 0) = Mat3::Identity();
@@ -328,8 +368,9 @@ extern "C" sfd_status_t sfd_landmark_refine(sfd_landmark_map_t *map, int32_t ind
     *info = sfd_landmark_update_t{};
     if (map->initialized != 1) return SFD_ERR_STATE;
     Mat3 R;
-    if (!usable_entry(*map, index) || !rotation_arg(R_CtoW, &R) || !all_finite(p_CinW_m, 3) ||
-        !all_finite(xn, 2) || !pose_cov_valid(cov_pose6)) {
+    Mat6 Cpose;
+    if (!usable_entry(*map, index) || !all_finite(xn, 2) ||
+        !pose_args(map, R_CtoW, p_CinW_m, cov_pose6, &R, &Cpose)) {
         return SFD_ERR_INVAL;
     }
     if (!std::isfinite(sigma_xn) || !(sigma_xn > 0.0) || !std::isfinite(alpha) || !(alpha > 0.0) ||
@@ -344,7 +385,6 @@ extern "C" sfd_status_t sfd_landmark_refine(sfd_landmark_map_t *map, int32_t ind
 
     const Vec3 pC(p_CinW_m[0], p_CinW_m[1], p_CinW_m[2]);
     const Vec2 z(xn[0], xn[1]);
-    const Mat6 Cpose = (cov_pose6 != nullptr) ? load_pose_cov(cov_pose6) : Mat6::Zero();
     const double s2 = sigma_xn * sigma_xn;
 
     // Innovation at the prior (reported; the plain EKF's gate statistic).

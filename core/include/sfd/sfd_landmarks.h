@@ -61,6 +61,12 @@ typedef struct {
     int32_t count;                           /**< landmarks held */
     uint32_t evictions;                      /**< landmarks dropped to make room (LRU) */
     int32_t initialized;
+    /* Private: the last camera pose argument (R_CtoW, p_CinW_m, cov_pose6) that passed
+     * validation, bit for bit, with its symmetrized covariance: the landmarks of one frame are
+     * initialized and refined from one pose, which is then checked once. */
+    int32_t pose_key_state_; /* 0 none, 1 without covariance, 2 with */
+    double pose_key_[48];
+    double pose_cov_sym_[36];
 } sfd_landmark_map_t;
 
 /** What one refinement did (PX4 EstimatorAidSource style). */
@@ -119,7 +125,8 @@ int32_t sfd_landmark_find(const sfd_landmark_map_t *map, int64_t track_id);
  * @return SFD_OK; SFD_ERR_INVAL for null map/R/p/xn, non-finite input, a matrix that is not a
  *         rotation, depth <= 0, a negative variance or sigma, or a bad cov_pose6; SFD_ERR_STATE
  *         for an uninitialized map; SFD_ERR_NUMERIC when the result is not finite; SFD_ERR_CAPACITY
- *         when the map is full and nothing may be evicted. On error the map is unchanged.
+ *         when the map is full and nothing may be evicted. On error the landmarks are unchanged
+ * (only the private pose cache may be).
  */
 sfd_status_t sfd_landmark_init_from_ray(sfd_landmark_map_t *map, int64_t track_id,
                                         const double R_CtoW[9], const double p_CinW_m[3],
@@ -153,7 +160,8 @@ sfd_status_t sfd_landmark_init_from_ray(sfd_landmark_map_t *map, int64_t track_i
  *         sigma or alpha out of range, or a bad cov_pose6; SFD_ERR_STATE for an uninitialized
  *         map; SFD_ERR_ORDER when utime is before last_seen_utime; SFD_ERR_DOMAIN when the
  *         landmark is not in front of the camera (depth <= 1e-6 m); SFD_ERR_NUMERIC when S is
- *         not positive definite or the result is not finite. On error the map is unchanged.
+ *         not positive definite or the result is not finite. On error the landmarks are unchanged
+ * (only the private pose cache may be).
  */
 sfd_status_t sfd_landmark_refine(sfd_landmark_map_t *map, int32_t index, const double R_CtoW[9],
                                  const double p_CinW_m[3], const double cov_pose6[36],
