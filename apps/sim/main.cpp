@@ -13,11 +13,15 @@
 //  - gyro: white noise 1.7e-4 rad/s/sqrt(Hz) (EuRoC's ADIS16448 datasheet figure), constant
 //    bias known to the integrator (the node estimates it; see SPEC);
 //  - camera: pinhole, f = 500 px, 752 x 480 px, so sigma = 0.005 normalized = 2.5 px.
+#include <sys/stat.h>
+
+#include <cerrno>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "euroc_semireal.hpp"
@@ -105,7 +109,7 @@ void usage(FILE *out) {
         "  --outlier-ratio R   isolation: fraction of spurious features (0.1)\n"
         "  --jump-px P         isolation: mistrack jump (8 px)\n"
         "  --alpha A           uav-imu: false-alarm rate of the printed thresholds\n"
-        "  --csv-dir DIR       write the scenario's CSV files into DIR\n"
+        "  --csv-dir DIR       write the scenario's CSV files into DIR (created if missing)\n"
         "  -o OUT.lcmlog       write a sensor log (log scenarios above)\n"
         "  --fault-magnitude K paper-uav log: k of k(-1,1) in normalized units (0.02)\n"
         "  --depth-var V       depth prior variance written with the features (0 m^2)\n"
@@ -296,6 +300,18 @@ int run_uav_imu(const Options &opt) {
     return n_status_err == 0 ? 0 : 1;
 }
 
+// mkdir -p: every missing directory of @p path, mode 0777 & ~umask. False with errno set.
+bool make_dirs(const char *path) {
+    const std::string p(path);
+    for (size_t k = 1; k <= p.size(); ++k) {
+        if (k < p.size() && p[k] != '/') continue;
+        const std::string prefix = p.substr(0, k);
+        if (::mkdir(prefix.c_str(), 0777) != 0 && errno != EEXIST) return false;
+    }
+    struct stat st;
+    return ::stat(path, &st) == 0 && S_ISDIR(st.st_mode) ? true : (errno = ENOTDIR, false);
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -434,6 +450,11 @@ int main(int argc, char **argv) {
     if (opt.scenario == nullptr) {
         std::fprintf(stderr, "sfd-sim: missing SCENARIO\n");
         usage(stderr);
+        return 2;
+    }
+    if (opt.csv_dir != nullptr && !make_dirs(opt.csv_dir)) {  // like `mkdir -p`
+        std::fprintf(stderr, "sfd-sim: --csv-dir %s: cannot create: %s\n", opt.csv_dir,
+                     std::strerror(errno));
         return 2;
     }
     if (!std::strcmp(opt.scenario, "euroc-semireal")) {
