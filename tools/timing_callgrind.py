@@ -18,8 +18,10 @@ per frame (IMU decoding: once per IMU message), and its work is bounded by the c
 parity isolation peaks at partial random fractions, OPRF at F = 1). The per-frame bound is the sum
 over stages of each stage's largest per-frame cost over the worst-case runs.
 
-Exit status: 0 when every run is within the bound and the OPRF worst case exhausted its budget on
-every judged frame; 1 otherwise; 2 for usage errors.
+Every run is within the bound by construction (each of its stages is at most that stage's
+maximum); what the tool checks is that the worst-case input really drives OPRF to its budget.
+Exit status: 0 when the OPRF worst case exhausted its hypothesis budget on every frame with
+matches; 1 otherwise; 2 for usage errors.
 
 Usage: tools/timing_callgrind.py [--build build/host] [--frames 60] [--features 200]
            [--worst-features 256] [--fractions 0.3 0.7 1] [--method both] [--out DIR]
@@ -207,8 +209,6 @@ def main():
         print(f"{tag}: {per_frame:,.0f} Ir/frame ({100 * per_frame / bound:.0f}% of the bound); "
               f"hypotheses per frame median {hyp[len(hyp) // 2] if hyp else 0}, "
               f"max {hyp[-1] if hyp else 0}; budget exhausted in {exhausted} of {len(rows)} frames")
-        if per_frame > bound:
-            ok = False
     # The OPRF worst case must exhaust the hypothesis budget on every frame the filter judges
     # (hypotheses > 0: the first frames, and a frame whose every track lost its landmark to the
     # previous frame's verdicts, have no match to draw from).
