@@ -82,9 +82,11 @@ static void nav_build_matches_first_occurrence_of_previous_tracks(void **state) 
     a.utime = 1050000;
     a.num_features = 200;
     for (int i = 0; i < a.num_features; ++i) {
+        const int col = i % 20;
+        const int row = i / 20;
         a.features[i].track_id = 1000 + i;
-        a.features[i].u_px = 20.0 + (double)(i % 20) * 30.0;
-        a.features[i].v_px = 20.0 + (double)(i / 20) * 40.0;
+        a.features[i].u_px = 20.0 + 30.0 * col;
+        a.features[i].v_px = 20.0 + 40.0 * row;
     }
     a.features[3].track_id = 5;
     a.features[150].track_id = 5; /* repeated: the first (index 3) must be the one matched */
