@@ -113,21 +113,26 @@ struct Shared {
 
 Shared g;
 
+// The published frame a received message names by its utime; nullptr (counted in *unknown) for a
+// message that did not decode or names no published frame. Called with g.mu held.
+Frame *published_frame(bool decoded, int64_t utime, long *unknown) {
+    const auto it = decoded ? g.by_utime.find(utime) : g.by_utime.end();
+    if (it == g.by_utime.end()) {
+        ++*unknown;
+        return nullptr;
+    }
+    return &g.frames[it->second];
+}
+
 void on_verdict(const lcm_recv_buf_t *rbuf, const char *, void *) {
     const int64_t now = mono_ns();
     static sfd_feature_verdict_t v;  // the receive thread's only
-    if (sfd_feature_verdict_t_decode(rbuf->data, 0, static_cast<int>(rbuf->data_size), &v) < 0) {
-        std::lock_guard<std::mutex> lk(g.mu);
-        ++g.unknown_verdicts;
-        return;
-    }
+    const bool decoded =
+        sfd_feature_verdict_t_decode(rbuf->data, 0, static_cast<int>(rbuf->data_size), &v) >= 0;
     std::lock_guard<std::mutex> lk(g.mu);
-    const auto it = g.by_utime.find(v.utime);
-    if (it == g.by_utime.end()) {
-        ++g.unknown_verdicts;
-        return;
-    }
-    Frame &f = g.frames[it->second];
+    Frame *fp = published_frame(decoded, v.utime, &g.unknown_verdicts);
+    if (fp == nullptr) return;
+    Frame &f = *fp;
     if (f.verdict_ns >= 0) {
         ++g.duplicates;
         return;
@@ -139,19 +144,13 @@ void on_verdict(const lcm_recv_buf_t *rbuf, const char *, void *) {
 }
 
 void on_timing(const lcm_recv_buf_t *rbuf, const char *, void *) {
-    sfd_timing_t t;
-    if (sfd_timing_t_decode(rbuf->data, 0, static_cast<int>(rbuf->data_size), &t) < 0) {
-        std::lock_guard<std::mutex> lk(g.mu);
-        ++g.unknown_timings;
-        return;
-    }
+    sfd_timing_t t{};
+    const bool decoded =
+        sfd_timing_t_decode(rbuf->data, 0, static_cast<int>(rbuf->data_size), &t) >= 0;
     std::lock_guard<std::mutex> lk(g.mu);
-    const auto it = g.by_utime.find(t.utime);
-    if (it == g.by_utime.end()) {
-        ++g.unknown_timings;
-        return;
-    }
-    Frame &f = g.frames[it->second];
+    Frame *fp = published_frame(decoded, t.utime, &g.unknown_timings);
+    if (fp == nullptr) return;
+    Frame &f = *fp;
     if (f.timing) return;
     ++g.timings;
     f.timing = true;
@@ -586,8 +585,7 @@ int main(int argc, char **argv) {
         fo.scenario = opt.sim;
         fo.seed = opt.seed;
         fo.frames = opt.frames;
-        fo.features =
-            opt.features > 0 ? opt.features : (opt.sim == "worst-case" ? SFD_MAX_FEATURES : 200);
+        fo.features = opt.features;  // <= 0: the scenario's default
         fo.random_fraction = opt.random_fraction;
         if (sfdsim::generate_flight(fo, pub, &fst) != 0) input_rc = 1;
     } else {

@@ -210,7 +210,8 @@ int generate_flight(const FlightOptions &opt, FlightSink &sink, FlightStats *sta
         L.vel[1] = L.mover ? 3.0 * std::sin(heading) : 0.0;
         L.vel[2] = 0.0;
     };
-    const int n_feat = std::min(opt.features, SFD_FEATURE_FRAME_T_CAPACITY);
+    const int features = opt.features > 0 ? opt.features : (worst ? SFD_MAX_FEATURES : 200);
+    const int n_feat = std::min(features, SFD_FEATURE_FRAME_T_CAPACITY);
     std::vector<Landmark> lms(static_cast<size_t>(n_feat));
     for (auto &L : lms) spawn(L, 0.0);
 

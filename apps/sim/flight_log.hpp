@@ -16,8 +16,10 @@ struct FlightOptions {
     std::string scenario;  // paper-uav, mistracking, moving-object, worst-case
     std::string out_path;  // .lcmlog (write_flight_log only)
     uint64_t seed = 1;
-    int frames = 400;    // 20 Hz camera frames
-    int features = 200;  // features in view per frame (capped at the wire capacity, 512)
+    int frames = 400;  // 20 Hz camera frames
+    // features in view per frame (capped at the wire capacity, 512); <= 0: the scenario's
+    // default, SFD_MAX_FEATURES for worst-case (the node's capacity), 200 otherwise
+    int features = 0;
     double outlier_ratio = 0.1;
     double fault_magnitude = 0.02;  // paper-uav: k of k(-1, 1)^T in normalized coordinates
     double jump_px = 8.0;           // mistracking: jump size (px)

@@ -491,8 +491,7 @@ int main(int argc, char **argv) {
         fo.out_path = opt.out_log;
         fo.seed = opt.seed;
         fo.frames = opt.frames > 0 ? opt.frames : 400;
-        const bool worst = !std::strcmp(opt.scenario, "worst-case");
-        fo.features = opt.features > 0 ? opt.features : (worst ? SFD_MAX_FEATURES : 200);
+        fo.features = opt.features;  // <= 0: the scenario's default
         fo.random_fraction = opt.random_fraction;
         fo.outlier_ratio = opt.outlier_ratio;
         fo.fault_magnitude = opt.fault_magnitude;

@@ -78,25 +78,24 @@ check_clean_run() {  # name frames
       "$SFD_TMP/$1.csv"
 }
 
+# A run against a fresh node that must end clean (exit 0, every frame judged): NAME FRAMES RATE
+run_clean() {
+  start_node "$1"
+  local rc=0
+  "$hil" --sim mistracking --frames "$2" --rate "$3" --timeout-ms 200 --lcm-url "$url" \
+    --csv "$SFD_TMP/$1.csv" > "$SFD_TMP/$1.txt" 2>&1 || rc=$?
+  stop_node "$1"
+  [ "$rc" -eq 0 ] || { cat "$SFD_TMP/$1.txt"; echo "rate $3: exit $rc, expected 0"; exit 1; }
+  check_clean_run "$1" "$2"
+}
+
 # 1. closed loop
-start_node rate0
-rc=0
-"$hil" --sim mistracking --frames 300 --rate 0 --timeout-ms 200 --lcm-url "$url" --csv "$SFD_TMP/rate0.csv" \
-  > "$SFD_TMP/rate0.txt" 2>&1 || rc=$?
-stop_node rate0
-[ "$rc" -eq 0 ] || { cat "$SFD_TMP/rate0.txt"; echo "rate 0: exit $rc, expected 0"; exit 1; }
-check_clean_run rate0 300
+run_clean rate0 300 0
 grep -q "stopped: 300 frames in, 300 processed" "$SFD_TMP/node_rate0.txt" || {
   cat "$SFD_TMP/node_rate0.txt"; echo "rate 0: the node did not process 300 frames"; exit 1; }
 
 # 2. paced, 4x the recorded pace
-start_node rate4
-rc=0
-"$hil" --sim mistracking --frames 150 --rate 4 --timeout-ms 200 --lcm-url "$url" --csv "$SFD_TMP/rate4.csv" \
-  > "$SFD_TMP/rate4.txt" 2>&1 || rc=$?
-stop_node rate4
-[ "$rc" -eq 0 ] || { cat "$SFD_TMP/rate4.txt"; echo "rate 4: exit $rc, expected 0"; exit 1; }
-check_clean_run rate4 150
+run_clean rate4 150 4
 grep -q "pacing: publish lateness" "$SFD_TMP/rate4.txt" || { echo "rate 4: no pacing row"; exit 1; }
 
 # 3. an impossible budget: every measured frame misses it, exit 3
