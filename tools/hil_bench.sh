@@ -10,6 +10,7 @@
 # Environment:
 #   SFD_NODE_PREFIX  command prefix of the node, e.g. "chrt -f 50" or "taskset -c 1 chrt -f 50"
 #   SFD_HIL_PREFIX   the same for sfd-hil, e.g. "taskset -c 0"
+#   SFD_NODE_ARGS    extra sfd-node options, e.g. "--sched-fifo 50 --cpu 1 --lock-memory"
 #   SFD_NODE_YAML    the node's configuration (default: apps/config/sfd.yaml with
 #                    filter.init_from_truth: 1, written to OUTDIR/node.yaml: sfd-hil --sim
 #                    publishes TRUTH, and its flights do not start at rest)
@@ -23,7 +24,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 if [ "$#" -lt 2 ]; then
-  sed -n '3,24p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//' >&2
+  sed -n '3,25p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//' >&2
   exit 2
 fi
 out="$1"; mode="$2"; shift 2
@@ -43,14 +44,14 @@ if [ -z "$yaml" ]; then
 fi
 # shellcheck disable=SC2086
 ${SFD_NODE_PREFIX:-} "$bin/sfd-node" --config "$yaml" --method "$mode" --lcm-url "$url" \
-  > "$out/node.txt" 2>&1 &
+  ${SFD_NODE_ARGS:-} > "$out/node.txt" 2>&1 &
 node=$!
 sleep 1
 if ! kill -0 "$node" 2>/dev/null; then
   cat "$out/node.txt" >&2; echo "hil_bench: sfd-node did not start" >&2; exit 1
 fi
 {
-  echo "node: ${SFD_NODE_PREFIX:-} $bin/sfd-node --config $yaml --method $mode --lcm-url $url"
+  echo "node: ${SFD_NODE_PREFIX:-} $bin/sfd-node --config $yaml --method $mode --lcm-url $url ${SFD_NODE_ARGS:-}"
   echo "hil:  ${SFD_HIL_PREFIX:-} $bin/sfd-hil $* --lcm-url $url --csv $out/hil.csv --png $out/hil.png"
   echo "host: $(uname -srm), $(nproc) CPUs, $(date -u +%Y-%m-%dT%H:%M:%SZ)"
 } > "$out/cmd.txt"

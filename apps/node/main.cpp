@@ -5,10 +5,15 @@
 // SIGINT/SIGTERM and prints its counters.
 #include <dlfcn.h>
 #include <lcm/lcm.h>
+#include <sched.h>
+#include <sys/mman.h>
+
+#include <cerrno>
 
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -79,18 +84,86 @@ void on_message(const lcm_recv_buf_t *rbuf, const char *, void *user) {
     ++g_app.messages;
 }
 
+// Real-time set-up requested on the command line (all off by default).
+struct Realtime {
+    int fifo_priority = 0;  // 0: keep the default scheduler
+    int cpu = -1;           // -1: no pinning
+    bool lock_memory = false;
+};
+
+// Touches `bytes` of stack below this frame, so that the pages the frame path uses are resident
+// (and, after mlockall(MCL_FUTURE), locked) before the first message.
+__attribute__((noinline)) void prefault_stack() {
+    constexpr std::size_t kBytes = std::size_t{256} * 1024U;
+    unsigned char page[kBytes];
+    std::memset(page, 0, kBytes);
+    asm volatile("" : : "r"(page) : "memory");  // the stores are not optimized away
+}
+
+// Applies rt; on failure prints the reason and returns false.
+bool apply_realtime(const Realtime &rt) {
+    if (rt.cpu >= 0) {
+        cpu_set_t set;
+        CPU_ZERO(&set);
+        CPU_SET(rt.cpu, &set);
+        if (sched_setaffinity(0, sizeof set, &set) != 0) {
+            std::fprintf(stderr, "sfd-node: --cpu %d: sched_setaffinity: %s\n", rt.cpu,
+                         std::strerror(errno));
+            return false;
+        }
+    }
+    if (rt.fifo_priority > 0) {
+        sched_param sp{};
+        sp.sched_priority = rt.fifo_priority;
+        if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
+            std::fprintf(stderr,
+                         "sfd-node: --sched-fifo %d: sched_setscheduler: %s (needs root or "
+                         "CAP_SYS_NICE)\n",
+                         rt.fifo_priority, std::strerror(errno));
+            return false;
+        }
+    }
+    if (rt.lock_memory) {
+        if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+            std::fprintf(stderr,
+                         "sfd-node: --lock-memory: mlockall: %s (needs CAP_IPC_LOCK or a "
+                         "large enough ulimit -l)\n",
+                         std::strerror(errno));
+            return false;
+        }
+        prefault_stack();
+    }
+    return true;
+}
+
+// Parses a decimal int in [lo, hi]; false otherwise.
+bool parse_int(const char *s, int lo, int hi, int *out) {
+    char *end = nullptr;
+    errno = 0;
+    const long v = std::strtol(s, &end, 10);
+    if (errno != 0 || end == s || *end != '\0' || v < lo || v > hi) return false;
+    *out = static_cast<int>(v);
+    return true;
+}
+
 void usage(FILE *f) {
     std::fprintf(
         f,
         "usage: sfd-node [--config F] [--lcm-url URL] [--method M]\n"
         "                [--imu-channel C] [--camera-info-channel C]\n"
         "                [--features-channel C] [--verdict-channel C] [--timing-channel C]\n"
-        "                [--truth-channel C]\n"
+        "                [--truth-channel C] [--sched-fifo P] [--cpu N] [--lock-memory]\n"
         "  Subscribes IMU, CAMERA_INFO, FEATURES (and TRUTH with filter.init_from_truth:\n"
         "  1, evaluation only); publishes SFD_VERDICT, SFD_STATE, SFD_TIMING.\n"
         "  --config F    YAML configuration (apps/config/sfd.yaml documents every key)\n"
         "  --lcm-url     LCM provider (default udpm://239.255.76.67:7667?ttl=0)\n"
         "  --method M    none | parity | oprf | ransac1 | ransacf | both\n"
+        "  Real-time set-up (docs/deploy.md), applied before LCM starts its receive thread,\n"
+        "  which inherits them; any that fails stops the node (exit 1) naming the reason:\n"
+        "  --sched-fifo P  run at SCHED_FIFO priority P (1..99; needs CAP_SYS_NICE)\n"
+        "  --cpu N         pin the process to CPU N (e.g. one kept free with isolcpus)\n"
+        "  --lock-memory   mlockall(current and future) and pre-fault 256 KiB of stack, so no\n"
+        "                  page fault lands in a frame (needs CAP_IPC_LOCK or ulimit -l)\n"
         "Stops on SIGINT/SIGTERM. Exit: 0 ok, 2 bad usage or configuration, 1 internal.\n");
 }
 
@@ -99,6 +172,7 @@ void usage(FILE *f) {
 int main(int argc, char **argv) {
     sfdapp::AppConfig &cfg = g_app.cfg;
     std::string err;
+    Realtime rt;
     // The config file first, then the flags over it.
     for (int i = 1; i + 1 < argc; ++i) {
         if (!std::strcmp(argv[i], "--config")) {
@@ -135,6 +209,20 @@ int main(int argc, char **argv) {
             cfg.channels.timing = argv[++i];
         } else if (!std::strcmp(a, "--truth-channel") && has) {
             cfg.channels.truth = argv[++i];
+        } else if (!std::strcmp(a, "--sched-fifo") && has) {
+            if (!parse_int(argv[++i], 1, 99, &rt.fifo_priority)) {
+                std::fprintf(stderr,
+                             "sfd-node: --sched-fifo: expected a priority 1..99, got '%s'\n",
+                             argv[i]);
+                return 2;
+            }
+        } else if (!std::strcmp(a, "--cpu") && has) {
+            if (!parse_int(argv[++i], 0, CPU_SETSIZE - 1, &rt.cpu)) {
+                std::fprintf(stderr, "sfd-node: --cpu: expected a CPU number, got '%s'\n", argv[i]);
+                return 2;
+            }
+        } else if (!std::strcmp(a, "--lock-memory")) {
+            rt.lock_memory = true;
         } else {
             std::fprintf(stderr, "sfd-node: unknown or incomplete option: %s\n", a);
             usage(stderr);
@@ -149,6 +237,7 @@ int main(int argc, char **argv) {
         std::fprintf(stderr, "sfd-node: node initialization failed\n");
         return 1;
     }
+    if (!apply_realtime(rt)) return 1;
     g_app.lcm = lcm_create(cfg.lcm_url.c_str());
     if (g_app.lcm == nullptr) {
         std::fprintf(stderr, "sfd-node: --lcm-url %s: cannot create the LCM instance\n",
@@ -173,6 +262,14 @@ int main(int argc, char **argv) {
     std::printf("sfd-node %d.%d: method %s, alpha %g, L %d, n %d, lcm %s\n", SFD_VERSION_MAJOR,
                 SFD_VERSION_MINOR, cfg.method.c_str(), cfg.node.params.false_alarm_rate,
                 cfg.node.params.window_frames, cfg.node.params.group_size, cfg.lcm_url.c_str());
+    if (rt.fifo_priority > 0 || rt.cpu >= 0 || rt.lock_memory) {
+        std::printf("sfd-node: real-time: scheduler %s, CPU %s, memory %s\n",
+                    rt.fifo_priority > 0
+                        ? ("SCHED_FIFO " + std::to_string(rt.fifo_priority)).c_str()
+                        : "default",
+                    rt.cpu >= 0 ? std::to_string(rt.cpu).c_str() : "any",
+                    rt.lock_memory ? "locked" : "not locked");
+    }
     if (cfg.node.nav.enabled && cfg.node.nav.init_from_truth) {
         std::printf("sfd-node: filter starts from TRUTH on %s (evaluation only)\n",
                     cfg.channels.truth.c_str());

@@ -82,11 +82,18 @@ bool window_basis(const double (*R_C0toCt)[9], int L, WindowBasis *wb) {
     return true;
 }
 
-bool reduce_feature(const WindowBasis &wb, const FeatureWindow &fw, const double (*R_C0toCt)[9],
-                    const double (*p_CtInC0)[3], bool translation_known, FeatureReduced *out) {
+namespace {
+
+// reduce_feature for the basis's d given as D (an int, or la::Dim<d> for unrolled loops).
+template <typename D>
+bool reduce_feature_d(const WindowBasis &wb, const FeatureWindow &fw, const double (*R_C0toCt)[9],
+                      const double (*p_CtInC0)[3], bool translation_known, D d,
+                      FeatureReduced *out) {
     const int L = wb.L;
-    const int d = wb.d;
-    double C[kMaxD][kMaxD] = {};
+    double C[kMaxD][kMaxD];
+    for (int k = 0; k < d; ++k) {
+        for (int l = 0; l < d; ++l) C[k][l] = 0.0;
+    }
     for (int k = 0; k < d; ++k) out->r[k] = 0.0;
     for (int t = 0; t < L; ++t) {
         // Z_t = zhat y_t (+ (I 0) R_t p_t): the depth-scaled measurement of eq. (24) with the
@@ -139,17 +146,20 @@ bool reduce_feature(const WindowBasis &wb, const FeatureWindow &fw, const double
     return std::isfinite(out->q);
 }
 
-namespace {
-
 // Unknown translation: T = sum q_i - b^T A^{-1} b (computed as a sum of squares) over the features
 // listed in idx (GLS form of the projection onto the complement of the common component, see
 // parity_space.hpp).
+template <typename D>
 __attribute__((noinline)) bool schur_statistic(const FeatureReduced *const *f, const int *idx,
-                                               int m, int d, double *T, double (*x_out)[kMaxD],
+                                               int m, D d, double *T, double (*x_out)[kMaxD],
                                                double (*Ainv_out)[kMaxD][kMaxD]) {
     if (m < 1 || m > kMaxN || d < 1 || d > kMaxD) return false;  // sizes are the callers' bounds
-    double A[kMaxD][kMaxD] = {};
-    double b[kMaxD] = {};
+    double A[kMaxD][kMaxD];
+    double b[kMaxD];
+    for (int k = 0; k < d; ++k) {
+        b[k] = 0.0;
+        for (int l = 0; l < d; ++l) A[k][l] = 0.0;
+    }
     for (int a = 0; a < m; ++a) {
         const FeatureReduced &fr = *f[idx[a]];
         for (int k = 0; k < d; ++k) {
@@ -187,8 +197,10 @@ __attribute__((noinline)) bool schur_statistic(const FeatureReduced *const *f, c
 // measurements once the landmarks, and for unknown translation the common component, are
 // eliminated): M_jj = C_j^{-1} (known translation, Ainv = nullptr) or
 // C_j^{-1} - C_j^{-1} A^{-1} C_j^{-1} with A = sum_i C_i^{-1} (unknown).
-void precision_block(const FeatureReduced &fj, const double (*Ainv)[kMaxD], int d,
-                     double (*M)[kMaxD]) {
+template <typename D>
+__attribute__((noinline)) void precision_block(const FeatureReduced &fj,
+                                               const double (*Ainv)[kMaxD], D d,
+                                               double (*M)[kMaxD]) {
     for (int k = 0; k < d; ++k) {
         for (int l = 0; l < d; ++l) M[k][l] = fj.Cinv[k][l];
     }
@@ -211,8 +223,9 @@ void precision_block(const FeatureReduced &fj, const double (*Ainv)[kMaxD], int 
 }
 
 // GLR of a fault e_j (x) Phi f: g^T G^+ g with g = Phi^T s_j, G = Phi^T M_jj Phi.
+template <typename D>
 __attribute__((noinline)) double signature_glr(const double (*phi)[2], const double *s,
-                                               const double (*M)[kMaxD], int d, int *dof) {
+                                               const double (*M)[kMaxD], D d, int *dof) {
     double G[2][2] = {};
     double g[2] = {};
     for (int a = 0; a < 2; ++a) {
@@ -230,10 +243,9 @@ __attribute__((noinline)) double signature_glr(const double (*phi)[2], const dou
     return la::pinv_quadratic_2x2(G, g, dof);
 }
 
-}  // namespace
-
-bool group_stats(const FeatureReduced *const *f, int n, int d, bool translation_known,
-                 bool signatures, GroupStats *out) {
+template <typename D>
+bool group_stats_d(const FeatureReduced *const *f, int n, D d, bool translation_known,
+                   bool signatures, GroupStats *out) {
     int all[kMaxN] = {};
     for (int i = 0; i < n; ++i) all[i] = i;
     double Ainv[kMaxD][kMaxD] = {};
@@ -287,6 +299,59 @@ bool group_stats(const FeatureReduced *const *f, int n, int d, bool translation_
         out->drift_glr[j] = signature_glr(fr.phi_drift, s, M, d, &out->drift_dof[j]);
     }
     return true;
+}
+
+template <int D, typename F>
+auto call_with_dim(F &f, int d) {
+    if constexpr (D <= kMaxD) {
+        return f(la::Dim<D>{});
+    } else {
+        return f(d);  // a case above this build's kMaxD: never taken, d <= kMaxD
+    }
+}
+
+/// Calls f(la::Dim<d>{}) for 1 <= d <= 8, f(d) otherwise (then the callee rejects d or, for
+/// d > kMaxD, never sees it: d = 2L - rank O_i <= 2L - 2). The compile-time size unrolls the
+/// d-loops of the kernels above; results are bit-identical to the run-time size
+/// (small_linalg.hpp).
+template <typename F>
+auto with_dim(int d, F &&f) {
+    static_assert(kMaxD <= 8, "SFD_MAX_WINDOW > 5: add the cases for d up to kMaxD");
+    switch (d) {
+        case 1:
+            return call_with_dim<1>(f, d);
+        case 2:
+            return call_with_dim<2>(f, d);
+        case 3:
+            return call_with_dim<3>(f, d);
+        case 4:
+            return call_with_dim<4>(f, d);
+        case 5:
+            return call_with_dim<5>(f, d);
+        case 6:
+            return call_with_dim<6>(f, d);
+        case 7:
+            return call_with_dim<7>(f, d);
+        case 8:
+            return call_with_dim<8>(f, d);
+        default:
+            return f(d);
+    }
+}
+
+}  // namespace
+
+bool reduce_feature(const WindowBasis &wb, const FeatureWindow &fw, const double (*R_C0toCt)[9],
+                    const double (*p_CtInC0)[3], bool translation_known, FeatureReduced *out) {
+    return with_dim(wb.d, [&](auto d) {
+        return reduce_feature_d(wb, fw, R_C0toCt, p_CtInC0, translation_known, d, out);
+    });
+}
+
+bool group_stats(const FeatureReduced *const *f, int n, int d, bool translation_known,
+                 bool signatures, GroupStats *out) {
+    return with_dim(
+        d, [&](auto dd) { return group_stats_d(f, n, dd, translation_known, signatures, out); });
 }
 
 }  // namespace parity

@@ -1,21 +1,31 @@
 // SPDX-License-Identifier: MIT
 // Small dense linear algebra on caller-provided row-major arrays of fixed capacity (stride K) and
-// run-time size n <= K: Cholesky factorization, triangular solves, SPD inverse, and the 2x2
-// symmetric pseudo-inverse. Loops are bounded by n <= K. Used where the sizes change per window
-// (L, n at run time) and a fixed-size Eigen type would not fit.
+// size n <= K: Cholesky factorization, triangular solves, SPD inverse, and the 2x2 symmetric
+// pseudo-inverse. Loops are bounded by n <= K. Used where the sizes change per window (L, n at
+// run time) and a fixed-size Eigen type would not fit.
+//
+// The size n is an `int`, or a compile-time `Dim<D>` (std::integral_constant): then every loop
+// has a constant trip count and the compiler unrolls the small ones. Both give bit-identical
+// results: the operations and their order are the same (no reassociation, -ffp-contract=off).
 #ifndef SFD_SMALL_LINALG_HPP
 #define SFD_SMALL_LINALG_HPP
+
+#include <type_traits>
 
 #include "core_private.hpp"
 
 namespace sfd {
 namespace la {
 
+/// A matrix size known at compile time; converts to int wherever a size is used.
+template <int D>
+using Dim = std::integral_constant<int, D>;
+
 /// L L^T = A for symmetric positive definite A (lower triangle read; L may alias A, then the
 /// factorization is in place). Fails (false) when a pivot is not positive and finite, or is below
 /// rel_tol times the largest diagonal entry of A. The strict upper triangle of L is set to zero.
-template <std::size_t K>
-bool cholesky(const double (*A)[K], int n, double (*L)[K], double rel_tol = 1e-13) {
+template <std::size_t K, typename N>
+bool cholesky(const double (*A)[K], N n, double (*L)[K], double rel_tol = 1e-13) {
     double max_diag = 0.0;
     for (int i = 0; i < n; ++i) max_diag = std::fmax(max_diag, std::fabs(A[i][i]));
     if (!(max_diag > 0.0) || !std::isfinite(max_diag)) return false;
@@ -38,8 +48,8 @@ bool cholesky(const double (*A)[K], int n, double (*L)[K], double rel_tol = 1e-1
 }
 
 /// x = L^{-1} b (forward substitution); x may alias b.
-template <std::size_t K>
-void forward_solve(const double (*L)[K], int n, const double *b, double *x) {
+template <std::size_t K, typename N>
+void forward_solve(const double (*L)[K], N n, const double *b, double *x) {
     for (int i = 0; i < n; ++i) {
         double s = b[i];
         for (int k = 0; k < i; ++k) s -= L[i][k] * x[k];
@@ -48,8 +58,8 @@ void forward_solve(const double (*L)[K], int n, const double *b, double *x) {
 }
 
 /// x = L^{-T} b (back substitution); x may alias b.
-template <std::size_t K>
-void backward_solve_transposed(const double (*L)[K], int n, const double *b, double *x) {
+template <std::size_t K, typename N>
+void backward_solve_transposed(const double (*L)[K], N n, const double *b, double *x) {
     for (int i = n - 1; i >= 0; --i) {
         double s = b[i];
         for (int k = i + 1; k < n; ++k) s -= L[k][i] * x[k];
@@ -58,15 +68,15 @@ void backward_solve_transposed(const double (*L)[K], int n, const double *b, dou
 }
 
 /// x = A^{-1} b with A = L L^T.
-template <std::size_t K>
-void chol_solve(const double (*L)[K], int n, const double *b, double *x) {
+template <std::size_t K, typename N>
+void chol_solve(const double (*L)[K], N n, const double *b, double *x) {
     forward_solve(L, n, b, x);
     backward_solve_transposed(L, n, x, x);
 }
 
 /// Ainv = A^{-1} with A = L L^T (symmetric result).
-template <std::size_t K>
-void chol_inverse(const double (*L)[K], int n, double (*Ainv)[K]) {
+template <std::size_t K, typename N>
+void chol_inverse(const double (*L)[K], N n, double (*Ainv)[K]) {
     double col[K];
     for (int j = 0; j < n; ++j) {
         for (int i = 0; i < n; ++i) col[i] = (i == j) ? 1.0 : 0.0;

@@ -12,7 +12,10 @@
 #  3. an impossible --budget-us 1: exit 3, every measured frame a deadline miss;
 #  4. no node: every frame times out: exit 3, all frames lost;
 #  5. usage and input errors: exit 2 (no source, unknown scenario, unreadable log, a file that
-#     is not an LCM log).
+#     is not an LCM log);
+#  6. sfd-node's real-time set-up (--sched-fifo, --cpu, --lock-memory): the node and its LCM
+#     receive thread run SCHED_FIFO at the priority asked, pinned to the CPU asked, with locked
+#     memory (VmLck > 0), and a closed-loop run against it ends clean; bad values exit 2.
 # usage: hil_loopback.sh BUILD_DIR
 set -euo pipefail
 build="$1"
@@ -32,7 +35,7 @@ expect_rc() {  # expected-rc description command...
   if [ "$rc" -ne "$want" ]; then
     cat "$tmp/out.txt"; echo "hil_loopback: $what: exit $rc, expected $want"; exit 1
   fi
-  echo "ok: $what -> exit $rc: $(grep -m1 'sfd-hil:' "$tmp/out.txt" || true)"
+  echo "ok: $what -> exit $rc: $(grep -m1 'sfd-[a-z]*:' "$tmp/out.txt" || true)"
 }
 expect_rc 2 "no source" "$hil"
 expect_rc 2 "unknown scenario" "$hil" --sim nowhere
@@ -40,6 +43,11 @@ expect_rc 2 "--log and --sim together" "$hil" --sim mistracking --log "$tmp/x.lc
 expect_rc 2 "bad --rate" "$hil" --sim mistracking --rate fast
 head -c 5000 /dev/urandom > "$tmp/garbage.lcmlog"
 expect_rc 2 "unreadable log" "$hil" --log "$tmp/missing.lcmlog"
+node_bin="$build/apps/sfd-node"
+expect_rc 2 "sfd-node --sched-fifo 0" "$node_bin" --sched-fifo 0
+expect_rc 2 "sfd-node --sched-fifo 100" "$node_bin" --sched-fifo 100
+expect_rc 2 "sfd-node --cpu -1" "$node_bin" --cpu -1
+expect_rc 2 "sfd-node --cpu x" "$node_bin" --cpu x
 
 export SFD_BUILD="$build" SFD_TMP="$tmp"
 unshare -n bash -euo pipefail <<'NS'
@@ -48,8 +56,9 @@ ip link set lo multicast on
 ip route add 224.0.0.0/4 dev lo
 url="udpm://239.255.76.71:7671?ttl=0"
 hil="$SFD_BUILD/apps/sfd-hil"
-start_node() {
-  "$SFD_BUILD/apps/sfd-node" --lcm-url "$url" > "$SFD_TMP/node_$1.txt" 2>&1 &
+start_node() {  # name [sfd-node options...]
+  local name="$1"; shift
+  "$SFD_BUILD/apps/sfd-node" --lcm-url "$url" "$@" > "$SFD_TMP/node_$name.txt" 2>&1 &
   node=$!
   sleep 0.5
 }
@@ -79,8 +88,8 @@ check_clean_run() {  # name frames
 }
 
 # A run against a fresh node that must end clean (exit 0, every frame judged): NAME FRAMES RATE
-run_clean() {
-  start_node "$1"
+run_clean() {  # NAME FRAMES RATE [sfd-node options...]
+  start_node "$1" "${@:4}"
   local rc=0
   "$hil" --sim mistracking --frames "$2" --rate "$3" --timeout-ms 200 --lcm-url "$url" \
     --csv "$SFD_TMP/$1.csv" > "$SFD_TMP/$1.txt" 2>&1 || rc=$?
@@ -126,5 +135,28 @@ rc=0
 [ "$rc" -eq 2 ] && grep -q "not an LCM log event" "$SFD_TMP/garbage.txt" || {
   cat "$SFD_TMP/garbage.txt"; echo "garbage log: exit $rc, expected 2 with a reason"; exit 1; }
 echo "ok: garbage log -> exit 2: $(grep -m1 'not an LCM' "$SFD_TMP/garbage.txt")"
+
+# 6. real-time set-up: every thread of the node (main and LCM's receive thread) SCHED_FIFO 7,
+# pinned to CPU 0, memory locked; then a clean closed-loop run against it.
+if chrt -f 1 true 2>/dev/null; then
+  start_node rt --sched-fifo 7 --cpu 0 --lock-memory
+  grep -q "real-time: scheduler SCHED_FIFO 7, CPU 0, memory locked" "$SFD_TMP/node_rt.txt" || {
+    cat "$SFD_TMP/node_rt.txt"; echo "rt: no real-time line"; exit 1; }
+  threads=0
+  for task in /proc/"$node"/task/*; do
+    tid="${task##*/}"
+    threads=$((threads + 1))
+    chrt -p "$tid" | grep -q "scheduling policy: SCHED_FIFO" || { chrt -p "$tid"; echo "rt: thread $tid not SCHED_FIFO"; exit 1; }
+    chrt -p "$tid" | grep -q "scheduling priority: 7$" || { chrt -p "$tid"; echo "rt: thread $tid priority"; exit 1; }
+    [ "$(taskset -pc "$tid" | awk '{print $NF}')" = "0" ] || { taskset -pc "$tid"; echo "rt: thread $tid affinity"; exit 1; }
+  done
+  locked_kb="$(awk '/^VmLck:/ {print $2}' /proc/"$node"/status)"
+  [ "${locked_kb:-0}" -gt 0 ] || { grep Vm /proc/"$node"/status; echo "rt: no locked memory"; exit 1; }
+  stop_node rt
+  echo "ok: rt node: $threads threads SCHED_FIFO 7 on CPU 0, VmLck $locked_kb kB"
+  run_clean rt_run 100 0 --sched-fifo 7 --cpu 0 --lock-memory
+else
+  echo "hil_loopback: SCHED_FIFO not permitted here: real-time set-up not checked"
+fi
 NS
 echo "hil_loopback: all checks passed"
