@@ -649,18 +649,19 @@ int main(int argc, char **argv) {
         }
     }
     // Node-side drops during the run (SFD_TIMING rejected[], last minus first received): inputs
-    // the node discarded. DEPTH (a missing depth prior replaced), IMU_GAP / IMU_LATE (frames
-    // judged UNTESTED), IMU_OVERFLOW (the IMU ring wrapping: the oldest sample, long consumed,
-    // overwritten) and CORE are shown but are not message losses.
+    // the node discarded, IMU_OVERFLOW included (IMU samples overwritten in the node's ring
+    // before a frame could use them; the ring wrapping over consumed samples is not counted).
+    // DEPTH (a missing depth prior replaced), IMU_GAP / IMU_LATE (frames judged UNTESTED) and
+    // CORE are shown but are not message losses.
     long node_drops = 0;
     std::string rej_line;
     for (int k = 0; k < SFD_TIMING_T_NUM_REASONS; ++k) {
         const int64_t d = g.last_rejected[k] - g.first_rejected[k];
-        const bool loss = k == SFD_TIMING_T_REJECT_DECODE || k == SFD_TIMING_T_REJECT_COUNT ||
-                          k == SFD_TIMING_T_REJECT_NONFINITE || k == SFD_TIMING_T_REJECT_ORDER ||
-                          k == SFD_TIMING_T_REJECT_CAMERA_ID ||
-                          k == SFD_TIMING_T_REJECT_NO_CAMERA_INFO ||
-                          k == SFD_TIMING_T_REJECT_CAPACITY;
+        const bool loss =
+            k == SFD_TIMING_T_REJECT_DECODE || k == SFD_TIMING_T_REJECT_COUNT ||
+            k == SFD_TIMING_T_REJECT_NONFINITE || k == SFD_TIMING_T_REJECT_ORDER ||
+            k == SFD_TIMING_T_REJECT_CAMERA_ID || k == SFD_TIMING_T_REJECT_NO_CAMERA_INFO ||
+            k == SFD_TIMING_T_REJECT_IMU_OVERFLOW || k == SFD_TIMING_T_REJECT_CAPACITY;
         if (loss) node_drops += d;
         if (d != 0 || g.last_rejected[k] != 0) {
             rej_line += std::string(" ") + sfd_reject_reason_str(k) + "=" + std::to_string(d) +

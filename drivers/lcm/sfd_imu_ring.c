@@ -7,6 +7,12 @@ void sfd_imu_ring_init(sfd_imu_ring_t *ring) {
     ring->head = 0;
     ring->count = 0;
     ring->overwritten = 0;
+    ring->lost = 0;
+    ring->needed_from_us = INT64_MIN;
+}
+
+void sfd_imu_ring_mark_needed(sfd_imu_ring_t *ring, int64_t t_us) {
+    if (t_us > ring->needed_from_us) ring->needed_from_us = t_us;
 }
 
 static const sfd_imu_sample_t *at(const sfd_imu_ring_t *ring, int32_t i) {
@@ -21,10 +27,15 @@ int sfd_imu_ring_push(sfd_imu_ring_t *ring, const sfd_imu_sample_t *sample) {
     if (ring->count > 0 && sample->t_us <= sfd_imu_ring_newest(ring)) return SFD_REJECT_ORDER;
     int result = SFD_REJECT_NONE;
     if (ring->count == SFD_IMU_RING_CAPACITY) {
+        /* harmless when a newer sample is still at or before the first time anyone needs */
+        const int harmless = ring->count >= 2 && at(ring, 1)->t_us <= ring->needed_from_us;
         ring->head = (ring->head + 1) % SFD_IMU_RING_CAPACITY;
         ring->count--;
         ring->overwritten++;
-        result = SFD_REJECT_IMU_OVERFLOW;
+        if (!harmless) {
+            ring->lost++;
+            result = SFD_REJECT_IMU_OVERFLOW;
+        }
     }
     ring->samples[(ring->head + ring->count) % SFD_IMU_RING_CAPACITY] = *sample;
     ring->count++;

@@ -24,9 +24,11 @@ extern "C" {
 
 typedef struct {
     sfd_imu_sample_t samples[SFD_IMU_RING_CAPACITY];
-    int32_t head;        /* index of the oldest sample */
-    int32_t count;       /* samples held */
-    int64_t overwritten; /* samples dropped because the ring was full (oldest first) */
+    int32_t head;           /* index of the oldest sample */
+    int32_t count;          /* samples held */
+    int64_t overwritten;    /* samples dropped because the ring was full (oldest first) */
+    int64_t lost;           /* of those, the ones a later frame might still have needed */
+    int64_t needed_from_us; /* frames need no sample before the last one at or before this */
 } sfd_imu_ring_t;
 
 /** @brief Empties the ring. */
@@ -34,12 +36,22 @@ void sfd_imu_ring_init(sfd_imu_ring_t *ring);
 
 /**
  * @brief Appends a sample. When the ring is full the oldest sample is overwritten and counted in
- *        `overwritten` (SFD_REJECT_IMU_OVERFLOW is returned so the caller can count it too; the
- *        new sample is stored).
+ *        `overwritten` (the new sample is stored). The drop is a loss, counted in `lost` and
+ *        returned as SFD_REJECT_IMU_OVERFLOW so the caller can count it too, unless the next
+ *        sample is itself at or before `needed_from_us` (sfd_imu_ring_mark_needed): then no
+ *        later frame's interval can start at the dropped one. In steady state the ring wraps
+ *        over samples consumed long ago, and that is not reported.
  * @return SFD_REJECT_NONE; SFD_REJECT_ORDER if t_us is not after the newest sample (not stored);
  *         SFD_REJECT_IMU_OVERFLOW as above.
  */
 int sfd_imu_ring_push(sfd_imu_ring_t *ring, const sfd_imu_sample_t *sample);
+
+/**
+ * @brief Declares that no frame to come needs a sample before the last one at or before t_us
+ *        (the caller's consumers read intervals [t0, t1] with t0 >= t_us). Never moves back;
+ *        INT64_MIN after sfd_imu_ring_init (everything may be needed).
+ */
+void sfd_imu_ring_mark_needed(sfd_imu_ring_t *ring, int64_t t_us);
 
 /** @brief Time of the newest sample, or INT64_MIN when empty. */
 int64_t sfd_imu_ring_newest(const sfd_imu_ring_t *ring);

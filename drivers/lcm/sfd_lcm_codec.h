@@ -36,7 +36,7 @@ typedef enum {
     SFD_REJECT_NO_CAMERA_INFO = 6, /**< features before any calibration */
     SFD_REJECT_IMU_GAP = 7,        /**< IMU does not cover the frame interval */
     SFD_REJECT_IMU_LATE = 8,       /**< waited too long for IMU */
-    SFD_REJECT_IMU_OVERFLOW = 9,   /**< IMU ring buffer full */
+    SFD_REJECT_IMU_OVERFLOW = 9,   /**< IMU ring full: a sample a frame may need overwritten */
     SFD_REJECT_CAPACITY = 10,      /**< more features than the core's SFD_MAX_FEATURES */
     SFD_REJECT_CORE = 11,          /**< the core refused the frame (status code) */
     SFD_REJECT_NUM_REASONS = 12

@@ -201,6 +201,20 @@ static void run_parity(sfd_node_t *n, const sfd_frame_t *frame, int imu_reason) 
     }
 }
 
+/* The earliest IMU time a frame after the one at t_us can need: the parity motion starts at t_us,
+ * a running filter at its own time, a filter waiting to start at rest looks back init_rest_s
+ * from the next frame (so at most that far from t_us). Older samples may be overwritten without
+ * a loss (sfd_imu_ring_push). */
+static int64_t imu_needed_from(const sfd_node_t *n, int64_t t_us) {
+    int64_t from = t_us;
+    const sfd_nav_t *nav = &n->nav;
+    if (n->cfg.nav.enabled && nav->ready && nav->ekf_utime < from) from = nav->ekf_utime;
+    if (n->cfg.nav.enabled && !nav->ready && !n->cfg.nav.init_from_truth) {
+        from = t_us - (int64_t)(n->cfg.nav.init_rest_s * 1e6);
+    }
+    return from;
+}
+
 /* Judges one frame. imu_reason: SFD_REJECT_NONE when the IMU may cover it, else why it cannot. */
 static void process_frame(sfd_node_t *n, const sfd_frame_t *frame, int64_t ingest_us,
                           int imu_reason) {
@@ -277,6 +291,7 @@ static void process_frame(sfd_node_t *n, const sfd_frame_t *frame, int64_t inges
     publish_results(n, frame, &times, t0);
     n->prev_frame_utime = frame->utime;
     n->have_prev_frame = 1;
+    sfd_imu_ring_mark_needed(&n->ring, imu_needed_from(n, frame->utime));
 }
 
 static void handle_imu(sfd_node_t *n, const void *data, int32_t size) {

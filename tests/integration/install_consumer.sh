@@ -15,7 +15,7 @@ test -f "$tmp/prefix/lib/libsfd_core.a" || test -f "$tmp/prefix/lib64/libsfd_cor
 # deployment files: the node, its configuration, the systemd unit pointing at both, the doc
 test -x "$tmp/prefix/bin/sfd-node"
 test -f "$tmp/prefix/etc/sfd/sfd.yaml"
-grep -q "^ExecStart=$tmp/prefix/bin/sfd-node --config $tmp/prefix/etc/sfd/sfd.yaml$" \
+grep -q "^ExecStart=$tmp/prefix/bin/sfd-node --config $tmp/prefix/etc/sfd/sfd.yaml --sched-fifo 50 --lock-memory$" \
   "$tmp/prefix/share/sfd/sfd-node.service"
 test -f "$tmp/prefix/share/sfd/deploy.md"
 "$tmp/prefix/bin/sfd-node" --help >/dev/null

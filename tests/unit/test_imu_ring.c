@@ -52,6 +52,37 @@ static void imu_ring_order_and_overflow(void **state) {
                      SFD_REJECT_NONE);
 }
 
+/* GIVEN a full ring WHEN the dropped sample lies before the last one at or before the time
+ * marked as needed THEN it is counted in `overwritten` only, not as a loss; WHEN it is that last
+ * sample (an interval starting at the mark begins there) or newer THEN it is a loss:
+ * IMU_OVERFLOW and `lost`. The mark never moves back. */
+static void imu_ring_overwrite_of_consumed_samples_is_not_a_loss(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-004");
+    sfd_imu_ring_init(&g_ring);
+    sfd_imu_sample_t s = sample(0, 0, 0, 0);
+    for (int i = 0; i < SFD_IMU_RING_CAPACITY; ++i) { /* t = 0, 5000, 10000, ... */
+        s.t_us = 5000 * (int64_t)i;
+        assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE);
+    }
+    sfd_imu_ring_mark_needed(&g_ring, 12000); /* intervals start at the sample t = 10000 */
+    sfd_imu_ring_mark_needed(&g_ring, 3000);  /* ignored: never back */
+    assert_true(g_ring.needed_from_us == 12000);
+    s.t_us += 5000;
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE); /* drops t = 0 */
+    s.t_us += 5000;
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE); /* drops t = 5000 */
+    assert_true(g_ring.overwritten == 2 && g_ring.lost == 0);
+    int32_t n = 0;
+    assert_int_equal(sfd_imu_ring_window(&g_ring, 12000, 20000, g_scratch, SFD_MAX_IMU_SAMPLES, &n),
+                     SFD_REJECT_NONE);
+    s.t_us += 5000;
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_IMU_OVERFLOW); /* drops 10000 */
+    assert_true(g_ring.overwritten == 3 && g_ring.lost == 1);
+    assert_int_equal(sfd_imu_ring_window(&g_ring, 12000, 20000, g_scratch, SFD_MAX_IMU_SAMPLES, &n),
+                     SFD_REJECT_IMU_GAP);
+}
+
 /* GIVEN 200 Hz samples WHEN asking for [t0, t1] THEN the copy starts at the last sample <= t0 and
  * ends at the first >= t1; a t1 past the newest sample is LATE; too many samples is CAPACITY. */
 static void imu_ring_window_bounds(void **state) {
@@ -123,6 +154,7 @@ static void imu_assemble_motion_matches_closed_form(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(imu_ring_order_and_overflow),
+        cmocka_unit_test(imu_ring_overwrite_of_consumed_samples_is_not_a_loss),
         cmocka_unit_test(imu_ring_window_bounds),
         cmocka_unit_test(imu_assemble_motion_matches_closed_form),
     };

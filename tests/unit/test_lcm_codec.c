@@ -266,6 +266,54 @@ static void handle_frame(int64_t utime, int32_t camera_id) {
     sfd_node_handle(&g_node, SFD_NODE_FEATURES, g_buf, encode_ff());
 }
 
+static void handle_imu_at(int64_t utime) {
+    sfd_imu_t imu;
+    memset(&imu, 0, sizeof imu);
+    imu.utime = utime;
+    imu.accel[2] = 9.81;
+    const int n = sfd_imu_t_encode(g_buf, 0, BUF, &imu);
+    sfd_node_handle(&g_node, SFD_NODE_IMU, g_buf, n);
+}
+
+/* GIVEN a node fed 200 Hz IMU and 20 Hz frames for longer than its IMU ring holds (the filter
+ * running, started at rest) WHEN the ring wraps over samples the frames have consumed THEN no
+ * imu_overflow is reported and every frame is judged; WHEN IMU keeps arriving with no frame to
+ * consume it THEN the drops of samples the next frame would need are reported. */
+static void lcm_node_reports_imu_overflow_only_for_needed_samples(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-004");
+    sfd_node_config_t cfg;
+    sfd_node_config_default(&cfg);
+    cfg.params.method = SFD_METHOD_PARITY;
+    assert_status(sfd_node_init(&g_node, &cfg, keep_verdict, NULL, NULL), SFD_OK);
+    g_verdicts = 0;
+    handle_camera_info(0);
+    const int samples = 3 * SFD_IMU_RING_CAPACITY; /* 30.72 s at 200 Hz */
+    int frames = 0;
+    int last_frame_sample = 0;
+    for (int i = 1; i <= samples; ++i) {
+        const int64_t t = 5000 * (int64_t)i;
+        handle_imu_at(t);
+        if (i % 10 == 5) {
+            handle_frame(t, 0);
+            frames++;
+            last_frame_sample = i;
+        }
+    }
+    assert_true(g_node.ring.overwritten == samples - SFD_IMU_RING_CAPACITY);
+    assert_true(g_node.ring.lost == 0);
+    assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == 0);
+    assert_true(g_node.nav.ready == 1);
+    assert_int_equal(g_verdicts, frames);
+    /* no frame for more than the ring's span: the next frame's interval starts at the last
+     * frame's sample; that sample and every newer one overwritten is a loss, no older one is */
+    const int extra = SFD_IMU_RING_CAPACITY + 5;
+    for (int i = samples + 1; i <= samples + extra; ++i) handle_imu_at(5000 * (int64_t)i);
+    const int newest_dropped = samples + extra - SFD_IMU_RING_CAPACITY; /* sample index */
+    assert_true(g_node.ring.lost == newest_dropped - last_frame_sample + 1);
+    assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == g_node.ring.lost);
+}
+
 /* GIVEN a node configured to follow the first camera WHEN the first calibration carries a
  * negative camera_id THEN the node follows that camera and no other: a later CAMERA_INFO and
  * FEATURES of another camera are rejected (CAMERA_ID) and verdicts name the followed camera.
@@ -309,6 +357,7 @@ int main(void) {
         cmocka_unit_test(lcm_features_decode_validates_before_core),
         cmocka_unit_test(lcm_imu_and_camera_info_validated),
         cmocka_unit_test(lcm_node_follows_first_camera_even_with_negative_id),
+        cmocka_unit_test(lcm_node_reports_imu_overflow_only_for_needed_samples),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
