@@ -26,7 +26,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from stack_report import parse  # noqa: E402  (same directory)
+from stack_report import is_project_function, parse, resolve_aliases  # noqa: E402  (same directory)
 
 
 def run(cmd):
@@ -137,6 +137,7 @@ def main():
         merged[3].update(labels)
         for k, v in edges.items():
             merged[4].setdefault(k, set()).update(v)
+    resolve_aliases(merged[1], merged[2], merged[3], merged[4])
     graphs = tuple(merged)
     files, frames, kinds = graphs[0], graphs[1], graphs[2]
     if not files:
@@ -166,6 +167,9 @@ def main():
         w, errs = worst_stack(graphs, args.extern_allowance, r)
         graph_errors.update(errs)
         check('stack_root', w <= reserved, f'{r} worst path = {w} B of the {reserved} B .stack')
+    for x in sorted({c for cs in graphs[4].values() for c in cs if c not in frames}):
+        if is_project_function(x):
+            graph_errors.add(f'{x}: a project function outside the call graph (charged, not followed)')
     for e in sorted(graph_errors):
         check('graph', False, e)
     if not graph_errors:

@@ -43,6 +43,51 @@ def parse(objdir):
     return files, frames, kinds, labels, edges
 
 
+CTOR_DTOR_RE = re.compile(r'([CD])1(E|I)')
+
+
+def is_project_function(name):
+    """True for a function of the project (C API sfd_*, C++ namespace sfd): such a callee must be
+    in the graph, followed, not charged the external allowance."""
+    return name.startswith(('sfd_', '_ZN3sfd', '_ZNK3sfd', 'sfd::')) or ' sfd::' in name
+
+
+def resolve_aliases(frames, kinds, labels, edges):
+    """Gives a frame to callee titles that name a function the graph holds under another title,
+    so that its stack is followed instead of charged as external:
+      - a file-local title 'path/file.cpp:MANGLED' (GCC's title for a function with internal
+        linkage, e.g. a template instantiated with a type from an anonymous namespace) is also
+        the function that other objects' edges call 'MANGLED';
+      - a complete-object constructor or destructor 'C1'/'D1' (GCC emits the base-object 'C2'/
+        'D2' and makes 'C1'/'D1' an alias of it).
+    Several candidates: each alias gets the largest frame and the union of their callees (the
+    worst case). Returns the list of (alias, target) pairs added."""
+    wanted = set()
+    for callees in edges.values():
+        wanted |= {c for c in callees if c not in frames}
+    by_name = {}
+    for title in list(frames):
+        if ':' in title and not title.startswith('__'):
+            by_name.setdefault(title.rsplit(':', 1)[1], []).append(title)
+    added = []
+    for w in sorted(wanted):
+        targets = list(by_name.get(w, []))
+        if not targets:
+            base = CTOR_DTOR_RE.sub(lambda m: m.group(1) + '2' + m.group(2), w, count=1)
+            if base != w:
+                targets = [t for t in [base] + by_name.get(base, []) if t in frames]
+        if not targets:
+            continue
+        frames[w] = max(frames[t] for t in targets)
+        kinds[w] = 'static' if all(kinds[t] == 'static' for t in targets) else \
+            next(kinds[t] for t in targets if kinds[t] != 'static')
+        labels.setdefault(w, labels.get(targets[0], w))
+        for t in targets:
+            edges.setdefault(w, set()).update(edges.get(t, ()))
+            added.append((w, t))
+    return added
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument('--objdir', required=True, help='directory holding the core objects and .ci files')
@@ -53,6 +98,7 @@ def main():
     args = ap.parse_args()
 
     files, frames, kinds, labels, edges = parse(args.objdir)
+    resolve_aliases(frames, kinds, labels, edges)
     if not files:
         print(f'stack_report: no .ci files under {args.objdir} (build with -fcallgraph-info=su)')
         return 1
@@ -107,6 +153,8 @@ def main():
           f'{len(files)} objects, {len(frames)} functions with frames')
     if externs:
         print(f'external functions charged {args.extern_allowance} B each: ' + ', '.join(sorted(externs)))
+    for x in sorted(x for x in externs if is_project_function(x)):
+        errors.append(f'{x}: a project function outside the call graph (charged, not followed)')
     for e in errors:
         print('ERROR: ' + e)
     return 1 if errors else 0
