@@ -343,6 +343,7 @@ auto with_dim(int d, F &&f) {
 
 bool reduce_feature(const WindowBasis &wb, const FeatureWindow &fw, const double (*R_C0toCt)[9],
                     const double (*p_CtInC0)[3], bool translation_known, FeatureReduced *out) {
+    if (wb.d < 1 || wb.d > kMaxD || wb.L < 1 || wb.L > kMaxL) return false;  // a corrupted basis
     return with_dim(wb.d, [&](auto d) {
         return reduce_feature_d(wb, fw, R_C0toCt, p_CtInC0, translation_known, d, out);
     });
@@ -350,6 +351,7 @@ bool reduce_feature(const WindowBasis &wb, const FeatureWindow &fw, const double
 
 bool group_stats(const FeatureReduced *const *f, int n, int d, bool translation_known,
                  bool signatures, GroupStats *out) {
+    if (d < 1 || d > kMaxD || n < 1 || n > kMaxN) return false;  // sizes are the callers' bounds
     return with_dim(
         d, [&](auto dd) { return group_stats_d(f, n, dd, translation_known, signatures, out); });
 }
