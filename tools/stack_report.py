@@ -44,12 +44,16 @@ def parse(objdir):
 
 
 CTOR_DTOR_RE = re.compile(r'([CD])1(E|I)')
+# A constructor or destructor label: 'ns::X::X(' or 'ns::X::~X(' (template arguments allowed).
+CTOR_LABEL_RE = re.compile(r'(?:^|[\s:])(\w+)(?:<[^()]*>)?::~?\1\(')
 
 
-def is_project_function(name):
-    """True for a function of the project (C API sfd_*, C++ namespace sfd): such a callee must be
-    in the graph, followed, not charged the external allowance."""
-    return name.startswith(('sfd_', '_ZN3sfd', '_ZNK3sfd', 'sfd::')) or ' sfd::' in name
+def is_project_function(title):
+    """True for a call-graph title (a C symbol or a mangled C++ name) of the project's own code:
+    the C API sfd_*, namespace sfd, and the anonymous namespaces of its files. Such a callee must
+    be in the graph and followed, not charged the external allowance."""
+    return title.startswith(('sfd_', '_ZN3sfd', '_ZNK3sfd', '_ZN12_GLOBAL__N_1',
+                             '_ZNK12_GLOBAL__N_1'))
 
 
 def resolve_aliases(frames, kinds, labels, edges):
@@ -67,14 +71,19 @@ def resolve_aliases(frames, kinds, labels, edges):
         wanted |= {c for c in callees if c not in frames}
     by_name = {}
     for title in list(frames):
-        if ':' in title and not title.startswith('__'):
-            by_name.setdefault(title.rsplit(':', 1)[1], []).append(title)
+        name = title.rsplit(':', 1)[1] if ':' in title else ''
+        if name.startswith('_Z'):  # 'path/file.cpp:_Z...': a file-local C++ function
+            by_name.setdefault(name, []).append(title)
     added = []
     for w in sorted(wanted):
-        targets = list(by_name.get(w, []))
-        if not targets:
-            base = CTOR_DTOR_RE.sub(lambda m: m.group(1) + '2' + m.group(2), w, count=1)
-            if base != w:
+        targets = list(by_name.get(w, [])) if w.startswith('_Z') else []
+        label = labels.get(w, '')
+        if not targets and CTOR_LABEL_RE.search(label):
+            # the last C1/D1 of the mangled name is the constructor's (nested names come first)
+            spans = list(CTOR_DTOR_RE.finditer(w))
+            if spans:
+                m = spans[-1]
+                base = w[:m.start()] + m.group(1) + '2' + m.group(2) + w[m.end():]
                 targets = [t for t in [base] + by_name.get(base, []) if t in frames]
         if not targets:
             continue
@@ -108,7 +117,7 @@ def main():
         # plain 'dynamic' (alloca, VLA) is not and is rejected.
         if k not in ('static', 'dynamic,bounded'):
             errors.append(f'{labels.get(f, f)}: frame is {k}, unbounded')
-    externs = set()
+    externs, extern_titles = set(), set()
     memo, state = {}, {}
 
     def depth(fn, path):
@@ -124,6 +133,7 @@ def main():
             if fn == '__indirect_call':
                 errors.append(f'indirect call from {labels.get(path[-1], path[-1]) if path else "?"}')
             externs.add(labels.get(fn, fn))
+            extern_titles.add(fn)
             memo[fn] = args.extern_allowance
             state[fn] = 'done'
             return memo[fn]
@@ -153,8 +163,9 @@ def main():
           f'{len(files)} objects, {len(frames)} functions with frames')
     if externs:
         print(f'external functions charged {args.extern_allowance} B each: ' + ', '.join(sorted(externs)))
-    for x in sorted(x for x in externs if is_project_function(x)):
-        errors.append(f'{x}: a project function outside the call graph (charged, not followed)')
+    for x in sorted(x for x in extern_titles if is_project_function(x)):
+        errors.append(f'{labels.get(x, x)}: a project function outside the call graph '
+                      '(charged, not followed)')
     for e in errors:
         print('ERROR: ' + e)
     return 1 if errors else 0

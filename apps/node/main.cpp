@@ -100,8 +100,9 @@ __attribute__((noinline)) void prefault_stack() {
     asm volatile("" : : "r"(page) : "memory");  // the stores are not optimized away
 }
 
-// Applies rt; on failure prints the reason and returns false.
-bool apply_realtime(const Realtime &rt) {
+// Applies rt's CPU and scheduler to the process (threads created later inherit them); on
+// failure prints the reason and returns false.
+bool apply_scheduling(const Realtime &rt) {
     if (rt.cpu >= 0) {
         cpu_set_t set;
         CPU_ZERO(&set);
@@ -123,6 +124,13 @@ bool apply_realtime(const Realtime &rt) {
             return false;
         }
     }
+    return true;
+}
+
+// Locks what is mapped now and what will be (rt.lock_memory), once LCM has set up its sockets
+// and buffers, so that a too small lock limit shows here, with its reason; on failure prints it
+// and returns false.
+bool lock_memory(const Realtime &rt) {
     if (rt.lock_memory) {
         if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
             std::fprintf(stderr,
@@ -158,8 +166,8 @@ void usage(FILE *f) {
         "  --config F    YAML configuration (apps/config/sfd.yaml documents every key)\n"
         "  --lcm-url     LCM provider (default udpm://239.255.76.67:7667?ttl=0)\n"
         "  --method M    none | parity | oprf | ransac1 | ransacf | both\n"
-        "  Real-time set-up (docs/deploy.md), applied before LCM starts its receive thread,\n"
-        "  which inherits them; any that fails stops the node (exit 1) naming the reason:\n"
+        "  Real-time set-up (docs/hil.md): scheduler and CPU before LCM starts its receive\n"
+        "  thread, which inherits them; any that fails stops the node (exit 1) with the reason:\n"
         "  --sched-fifo P  run at SCHED_FIFO priority P (1..99; needs CAP_SYS_NICE)\n"
         "  --cpu N         pin the process to CPU N (e.g. one kept free with isolcpus)\n"
         "  --lock-memory   mlockall(current and future) and pre-fault 256 KiB of stack, so no\n"
@@ -237,7 +245,7 @@ int main(int argc, char **argv) {
         std::fprintf(stderr, "sfd-node: node initialization failed\n");
         return 1;
     }
-    if (!apply_realtime(rt)) return 1;
+    if (!apply_scheduling(rt)) return 1;
     g_app.lcm = lcm_create(cfg.lcm_url.c_str());
     if (g_app.lcm == nullptr) {
         std::fprintf(stderr, "sfd-node: --lcm-url %s: cannot create the LCM instance\n",
@@ -251,6 +259,10 @@ int main(int argc, char **argv) {
         // Evaluation only: the filter starts from the first TRUTH poses (sfd-hil --sim publishes
         // them), as in sfd-replay.
         lcm_subscribe(g_app.lcm, cfg.channels.truth.c_str(), on_message, &g_kinds[3]);
+    }
+    if (!lock_memory(rt)) {
+        lcm_destroy(g_app.lcm);
+        return 1;
     }
     g_app.heap_count = reinterpret_cast<HeapCountFn>(dlsym(RTLD_DEFAULT, "sfd_heapcount_thread"));
     g_app.heap_count_total =

@@ -310,13 +310,12 @@ auto call_with_dim(F &f, int d) {
     }
 }
 
-/// Calls f(la::Dim<d>{}) for 1 <= d <= 8, f(d) otherwise (then the callee rejects d or, for
-/// d > kMaxD, never sees it: d = 2L - rank O_i <= 2L - 2). The compile-time size unrolls the
-/// d-loops of the kernels above; results are bit-identical to the run-time size
-/// (small_linalg.hpp).
+/// Calls f(la::Dim<d>{}) for 1 <= d <= min(8, kMaxD), f(d) otherwise: a build with
+/// SFD_MAX_WINDOW > 5 runs its larger d (up to kMaxD = 2 SFD_MAX_WINDOW - 2) with the run-time
+/// size, as fast as before the compile-time sizes. The compile-time size unrolls the d-loops of
+/// the kernels above; results are bit-identical to the run-time size (small_linalg.hpp).
 template <typename F>
 auto with_dim(int d, F &&f) {
-    static_assert(kMaxD <= 8, "SFD_MAX_WINDOW > 5: add the cases for d up to kMaxD");
     switch (d) {
         case 1:
             return call_with_dim<1>(f, d);

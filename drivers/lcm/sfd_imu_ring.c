@@ -9,10 +9,12 @@ void sfd_imu_ring_init(sfd_imu_ring_t *ring) {
     ring->overwritten = 0;
     ring->lost = 0;
     ring->needed_from_us = INT64_MIN;
+    ring->need_known = 0;
 }
 
-void sfd_imu_ring_mark_needed(sfd_imu_ring_t *ring, int64_t t_us) {
-    if (t_us > ring->needed_from_us) ring->needed_from_us = t_us;
+void sfd_imu_ring_set_needed(sfd_imu_ring_t *ring, int64_t t_us) {
+    ring->needed_from_us = t_us;
+    ring->need_known = 1;
 }
 
 static const sfd_imu_sample_t *at(const sfd_imu_ring_t *ring, int32_t i) {
@@ -27,8 +29,10 @@ int sfd_imu_ring_push(sfd_imu_ring_t *ring, const sfd_imu_sample_t *sample) {
     if (ring->count > 0 && sample->t_us <= sfd_imu_ring_newest(ring)) return SFD_REJECT_ORDER;
     int result = SFD_REJECT_NONE;
     if (ring->count == SFD_IMU_RING_CAPACITY) {
-        /* harmless when a newer sample is still at or before the first time anyone needs */
-        const int harmless = ring->count >= 2 && at(ring, 1)->t_us <= ring->needed_from_us;
+        /* harmless when no frame waits yet, or a newer sample is still at or before the first
+         * time a frame needs */
+        const int harmless =
+            !ring->need_known || (ring->count >= 2 && at(ring, 1)->t_us <= ring->needed_from_us);
         ring->head = (ring->head + 1) % SFD_IMU_RING_CAPACITY;
         ring->count--;
         ring->overwritten++;

@@ -29,6 +29,7 @@ typedef struct {
     int64_t overwritten;    /* samples dropped because the ring was full (oldest first) */
     int64_t lost;           /* of those, the ones a later frame might still have needed */
     int64_t needed_from_us; /* frames need no sample before the last one at or before this */
+    int32_t need_known;     /* 0 until the first sfd_imu_ring_set_needed: no frame waits yet */
 } sfd_imu_ring_t;
 
 /** @brief Empties the ring. */
@@ -37,10 +38,13 @@ void sfd_imu_ring_init(sfd_imu_ring_t *ring);
 /**
  * @brief Appends a sample. When the ring is full the oldest sample is overwritten and counted in
  *        `overwritten` (the new sample is stored). The drop is a loss, counted in `lost` and
- *        returned as SFD_REJECT_IMU_OVERFLOW so the caller can count it too, unless the next
- *        sample is itself at or before `needed_from_us` (sfd_imu_ring_mark_needed): then no
- *        later frame's interval can start at the dropped one. In steady state the ring wraps
- *        over samples consumed long ago, and that is not reported.
+ *        returned as SFD_REJECT_IMU_OVERFLOW so the caller can count it too, when a frame may
+ *        still need it: the consumer has declared what it needs (sfd_imu_ring_set_needed) and
+ *        the next sample is after `needed_from_us`, so an interval starting there would begin at
+ *        the dropped one. In steady state the ring wraps over samples consumed long ago, and
+ *        before the first declaration (no frame judged yet) over samples older than the ring's
+ *        span, which no first frame needs; neither is reported (a first frame that finds its
+ *        interval gone is judged UNTESTED and counted as imu_gap).
  * @return SFD_REJECT_NONE; SFD_REJECT_ORDER if t_us is not after the newest sample (not stored);
  *         SFD_REJECT_IMU_OVERFLOW as above.
  */
@@ -48,10 +52,10 @@ int sfd_imu_ring_push(sfd_imu_ring_t *ring, const sfd_imu_sample_t *sample);
 
 /**
  * @brief Declares that no frame to come needs a sample before the last one at or before t_us
- *        (the caller's consumers read intervals [t0, t1] with t0 >= t_us). Never moves back;
- *        INT64_MIN after sfd_imu_ring_init (everything may be needed).
+ *        (the caller's consumers read intervals [t0, t1] with t0 >= t_us). The caller restates
+ *        it after each frame, and lowers it when a consumer starts from an earlier time.
  */
-void sfd_imu_ring_mark_needed(sfd_imu_ring_t *ring, int64_t t_us);
+void sfd_imu_ring_set_needed(sfd_imu_ring_t *ring, int64_t t_us);
 
 /** @brief Time of the newest sample, or INT64_MIN when empty. */
 int64_t sfd_imu_ring_newest(const sfd_imu_ring_t *ring);

@@ -210,7 +210,8 @@ static int64_t imu_needed_from(const sfd_node_t *n, int64_t t_us) {
     const sfd_nav_t *nav = &n->nav;
     if (n->cfg.nav.enabled && nav->ready && nav->ekf_utime < from) from = nav->ekf_utime;
     if (n->cfg.nav.enabled && !nav->ready && !n->cfg.nav.init_from_truth) {
-        from = t_us - (int64_t)(n->cfg.nav.init_rest_s * 1e6);
+        const int64_t rest_us = (int64_t)(n->cfg.nav.init_rest_s * 1e6);
+        from = (t_us > INT64_MIN + rest_us) ? t_us - rest_us : INT64_MIN;
     }
     return from;
 }
@@ -291,7 +292,7 @@ static void process_frame(sfd_node_t *n, const sfd_frame_t *frame, int64_t inges
     publish_results(n, frame, &times, t0);
     n->prev_frame_utime = frame->utime;
     n->have_prev_frame = 1;
-    sfd_imu_ring_mark_needed(&n->ring, imu_needed_from(n, frame->utime));
+    sfd_imu_ring_set_needed(&n->ring, imu_needed_from(n, frame->utime));
 }
 
 static void handle_imu(sfd_node_t *n, const void *data, int32_t size) {
@@ -393,6 +394,11 @@ void sfd_node_handle(sfd_node_t *node, sfd_node_input_t kind, const void *data, 
                 sfd_truth_t_decode(data, 0, size, &node->wire_truth) == size) {
                 sfd_nav_truth(&node->nav, node->wire_truth.utime, node->wire_truth.position,
                               node->wire_truth.orientation);
+                /* a filter started from a TRUTH older than the last frame reads from there */
+                if (node->nav.ready && node->ring.need_known &&
+                    node->nav.ekf_utime < node->ring.needed_from_us) {
+                    sfd_imu_ring_set_needed(&node->ring, node->nav.ekf_utime);
+                }
             }
             break;
         default:

@@ -15,7 +15,8 @@
 #     is not an LCM log);
 #  6. sfd-node's real-time set-up (--sched-fifo, --cpu, --lock-memory): the node and its LCM
 #     receive thread run SCHED_FIFO at the priority asked, pinned to the CPU asked, with locked
-#     memory (VmLck > 0), and a closed-loop run against it ends clean; bad values exit 2.
+#     memory (VmLck > 0), and a closed-loop run against it ends clean; bad values exit 2;
+#     without CAP_SYS_NICE / CAP_IPC_LOCK (setpriv) the node stops with exit 1 and the reason.
 # usage: hil_loopback.sh BUILD_DIR
 set -euo pipefail
 build="$1"
@@ -43,11 +44,18 @@ expect_rc 2 "--log and --sim together" "$hil" --sim mistracking --log "$tmp/x.lc
 expect_rc 2 "bad --rate" "$hil" --sim mistracking --rate fast
 head -c 5000 /dev/urandom > "$tmp/garbage.lcmlog"
 expect_rc 2 "unreadable log" "$hil" --log "$tmp/missing.lcmlog"
+# sfd-node's real-time options: a bad value is refused before LCM starts (exit 2 and the reason;
+# a value wrongly taken would start a node, which `timeout` ends with 124).
 node_bin="$build/apps/sfd-node"
-expect_rc 2 "sfd-node --sched-fifo 0" "$node_bin" --sched-fifo 0
-expect_rc 2 "sfd-node --sched-fifo 100" "$node_bin" --sched-fifo 100
-expect_rc 2 "sfd-node --cpu -1" "$node_bin" --cpu -1
-expect_rc 2 "sfd-node --cpu x" "$node_bin" --cpu x
+node_refuses() {  # description pattern args...
+  local what="$1" pattern="$2"; shift 2
+  expect_rc 2 "$what" timeout 10 "$node_bin" "$@"
+  grep -q -- "$pattern" "$tmp/out.txt" || { cat "$tmp/out.txt"; echo "hil_loopback: $what: no '$pattern'"; exit 1; }
+}
+node_refuses "sfd-node --sched-fifo 0" "--sched-fifo: expected a priority 1..99, got '0'" --sched-fifo 0
+node_refuses "sfd-node --sched-fifo 100" "--sched-fifo: expected a priority 1..99, got '100'" --sched-fifo 100
+node_refuses "sfd-node --cpu -1" "--cpu: expected a CPU number, got '-1'" --cpu -1
+node_refuses "sfd-node --cpu x" "--cpu: expected a CPU number, got 'x'" --cpu x
 
 export SFD_BUILD="$build" SFD_TMP="$tmp"
 unshare -n bash -euo pipefail <<'NS'
@@ -150,10 +158,25 @@ if chrt -f 1 true 2>/dev/null; then
     chrt -p "$tid" | grep -q "scheduling priority: 7$" || { chrt -p "$tid"; echo "rt: thread $tid priority"; exit 1; }
     [ "$(taskset -pc "$tid" | awk '{print $NF}')" = "0" ] || { taskset -pc "$tid"; echo "rt: thread $tid affinity"; exit 1; }
   done
+  [ "$threads" -ge 2 ] || { echo "rt: $threads thread(s): LCM's receive thread not there to check"; exit 1; }
   locked_kb="$(awk '/^VmLck:/ {print $2}' /proc/"$node"/status)"
   [ "${locked_kb:-0}" -gt 0 ] || { grep Vm /proc/"$node"/status; echo "rt: no locked memory"; exit 1; }
   stop_node rt
   echo "ok: rt node: $threads threads SCHED_FIFO 7 on CPU 0, VmLck $locked_kb kB"
+  # Without the capabilities: exit 1 and the reason, before any message is handled.
+  if command -v setpriv > /dev/null; then
+    rc=0
+    (ulimit -l 64; timeout 10 setpriv --inh-caps=-ipc_lock --bounding-set=-ipc_lock \
+      "$SFD_BUILD/apps/sfd-node" --lcm-url "$url" --lock-memory) > "$SFD_TMP/nolock.txt" 2>&1 || rc=$?
+    [ "$rc" -eq 1 ] && grep -q "^sfd-node: --lock-memory: mlockall: .*CAP_IPC_LOCK" "$SFD_TMP/nolock.txt" || {
+      cat "$SFD_TMP/nolock.txt"; echo "rt: --lock-memory without CAP_IPC_LOCK: exit $rc, expected 1"; exit 1; }
+    rc=0
+    timeout 10 setpriv --inh-caps=-sys_nice --bounding-set=-sys_nice \
+      "$SFD_BUILD/apps/sfd-node" --lcm-url "$url" --sched-fifo 7 > "$SFD_TMP/nonice.txt" 2>&1 || rc=$?
+    [ "$rc" -eq 1 ] && grep -q "^sfd-node: --sched-fifo 7: sched_setscheduler: .*CAP_SYS_NICE" "$SFD_TMP/nonice.txt" || {
+      cat "$SFD_TMP/nonice.txt"; echo "rt: --sched-fifo without CAP_SYS_NICE: exit $rc, expected 1"; exit 1; }
+    echo "ok: without CAP_IPC_LOCK / CAP_SYS_NICE: exit 1: $(head -1 "$SFD_TMP/nolock.txt") / $(head -1 "$SFD_TMP/nonice.txt")"
+  fi
   run_clean rt_run 100 0 --sched-fifo 7 --cpu 0 --lock-memory
 else
   echo "hil_loopback: SCHED_FIFO not permitted here: real-time set-up not checked"

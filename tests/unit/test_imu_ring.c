@@ -22,8 +22,9 @@ static sfd_imu_sample_t sample(int64_t t, double wx, double wy, double wz) {
     return s;
 }
 
-/* GIVEN samples WHEN pushed out of order THEN ORDER and not stored; WHEN the ring is full THEN
- * the oldest is overwritten, counted, and IMU_OVERFLOW returned while the new one is kept. */
+/* GIVEN samples WHEN pushed out of order THEN ORDER and not stored; WHEN the ring is full and a
+ * frame needs its oldest sample THEN that sample is overwritten, counted, and IMU_OVERFLOW
+ * returned while the new one is kept. */
 static void imu_ring_order_and_overflow(void **state) {
     (void)state;
     SFD_REQ("SFD-LCM-004");
@@ -39,6 +40,7 @@ static void imu_ring_order_and_overflow(void **state) {
         s.t_us = 100 + 5000 * (int64_t)i;
         assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE);
     }
+    sfd_imu_ring_set_needed(&g_ring, 100); /* a frame's interval starts at the first sample */
     s.t_us += 5000;
     assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_IMU_OVERFLOW);
     assert_int_equal(g_ring.count, SFD_IMU_RING_CAPACITY);
@@ -52,10 +54,11 @@ static void imu_ring_order_and_overflow(void **state) {
                      SFD_REJECT_NONE);
 }
 
-/* GIVEN a full ring WHEN the dropped sample lies before the last one at or before the time
- * marked as needed THEN it is counted in `overwritten` only, not as a loss; WHEN it is that last
- * sample (an interval starting at the mark begins there) or newer THEN it is a loss:
- * IMU_OVERFLOW and `lost`. The mark never moves back. */
+/* GIVEN a full ring WHEN nothing was declared needed yet THEN a drop is no loss; WHEN the
+ * dropped sample lies before the last one at or before the time declared needed THEN it is
+ * counted in `overwritten` only; WHEN it is that last sample (an interval starting at the mark
+ * begins there) or newer THEN it is a loss: IMU_OVERFLOW and `lost`; a lowered mark makes a
+ * newer sample needed again. */
 static void imu_ring_overwrite_of_consumed_samples_is_not_a_loss(void **state) {
     (void)state;
     SFD_REQ("SFD-LCM-004");
@@ -65,21 +68,25 @@ static void imu_ring_overwrite_of_consumed_samples_is_not_a_loss(void **state) {
         s.t_us = 5000 * (int64_t)i;
         assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE);
     }
-    sfd_imu_ring_mark_needed(&g_ring, 12000); /* intervals start at the sample t = 10000 */
-    sfd_imu_ring_mark_needed(&g_ring, 3000);  /* ignored: never back */
-    assert_true(g_ring.needed_from_us == 12000);
     s.t_us += 5000;
-    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE); /* drops t = 0 */
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE); /* drops 0: no need yet */
+    assert_true(g_ring.overwritten == 1 && g_ring.lost == 0);
+    sfd_imu_ring_set_needed(&g_ring, 5000); /* an interval would start at the sample t = 5000 */
     s.t_us += 5000;
-    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE); /* drops t = 5000 */
-    assert_true(g_ring.overwritten == 2 && g_ring.lost == 0);
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_IMU_OVERFLOW); /* drops 5000 */
+    assert_true(g_ring.overwritten == 2 && g_ring.lost == 1);
+    sfd_imu_ring_set_needed(&g_ring, 22000); /* intervals start at the sample t = 20000 */
+    s.t_us += 5000;
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE); /* drops 10000 */
+    assert_true(g_ring.overwritten == 3 && g_ring.lost == 1);
+    sfd_imu_ring_set_needed(&g_ring, 16000); /* lowered: intervals start at 15000 */
     int32_t n = 0;
-    assert_int_equal(sfd_imu_ring_window(&g_ring, 12000, 20000, g_scratch, SFD_MAX_IMU_SAMPLES, &n),
+    assert_int_equal(sfd_imu_ring_window(&g_ring, 16000, 30000, g_scratch, SFD_MAX_IMU_SAMPLES, &n),
                      SFD_REJECT_NONE);
     s.t_us += 5000;
-    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_IMU_OVERFLOW); /* drops 10000 */
-    assert_true(g_ring.overwritten == 3 && g_ring.lost == 1);
-    assert_int_equal(sfd_imu_ring_window(&g_ring, 12000, 20000, g_scratch, SFD_MAX_IMU_SAMPLES, &n),
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_IMU_OVERFLOW); /* drops 15000 */
+    assert_true(g_ring.overwritten == 4 && g_ring.lost == 2);
+    assert_int_equal(sfd_imu_ring_window(&g_ring, 16000, 30000, g_scratch, SFD_MAX_IMU_SAMPLES, &n),
                      SFD_REJECT_IMU_GAP);
 }
 

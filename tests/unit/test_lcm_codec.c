@@ -266,11 +266,11 @@ static void handle_frame(int64_t utime, int32_t camera_id) {
     sfd_node_handle(&g_node, SFD_NODE_FEATURES, g_buf, encode_ff());
 }
 
-static void handle_imu_at(int64_t utime) {
+static void handle_imu_at(int64_t utime, double accel_z_m_s2) {
     sfd_imu_t imu;
     memset(&imu, 0, sizeof imu);
     imu.utime = utime;
-    imu.accel[2] = 9.81;
+    imu.accel[2] = accel_z_m_s2;
     const int n = sfd_imu_t_encode(g_buf, 0, BUF, &imu);
     sfd_node_handle(&g_node, SFD_NODE_IMU, g_buf, n);
 }
@@ -293,7 +293,7 @@ static void lcm_node_reports_imu_overflow_only_for_needed_samples(void **state) 
     int last_frame_sample = 0;
     for (int i = 1; i <= samples; ++i) {
         const int64_t t = 5000 * (int64_t)i;
-        handle_imu_at(t);
+        handle_imu_at(t, 9.81);
         if (i % 10 == 5) {
             handle_frame(t, 0);
             frames++;
@@ -308,9 +308,43 @@ static void lcm_node_reports_imu_overflow_only_for_needed_samples(void **state) 
     /* no frame for more than the ring's span: the next frame's interval starts at the last
      * frame's sample; that sample and every newer one overwritten is a loss, no older one is */
     const int extra = SFD_IMU_RING_CAPACITY + 5;
-    for (int i = samples + 1; i <= samples + extra; ++i) handle_imu_at(5000 * (int64_t)i);
+    for (int i = samples + 1; i <= samples + extra; ++i) handle_imu_at(5000 * (int64_t)i, 9.81);
     const int newest_dropped = samples + extra - SFD_IMU_RING_CAPACITY; /* sample index */
     assert_true(g_node.ring.lost == newest_dropped - last_frame_sample + 1);
+    assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == g_node.ring.lost);
+}
+
+/* GIVEN a filter that cannot start at rest (the accelerometer reads no gravity) and keeps
+ * looking back init_rest_s of IMU from every frame WHEN the ring wraps while frames come THEN
+ * nothing is reported; WHEN frames stop for longer than the ring holds THEN exactly the samples
+ * from the last one at or before (last frame - init_rest_s) on are reported lost. */
+static void lcm_node_waiting_filter_keeps_its_rest_window(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-004");
+    sfd_node_config_t cfg;
+    sfd_node_config_default(&cfg);
+    cfg.params.method = SFD_METHOD_PARITY;
+    assert_status(sfd_node_init(&g_node, &cfg, keep_verdict, NULL, NULL), SFD_OK);
+    handle_camera_info(0);
+    const int samples = 3 * SFD_IMU_RING_CAPACITY;
+    int last_frame_sample = 0;
+    for (int i = 1; i <= samples; ++i) {
+        const int64_t t = 5000 * (int64_t)i;
+        handle_imu_at(t, 0.0);
+        if (i % 10 == 5) {
+            handle_frame(t, 0);
+            last_frame_sample = i;
+        }
+    }
+    assert_int_equal(g_node.nav.ready, 0);
+    assert_true(g_node.ring.lost == 0);
+    assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == 0);
+    const int extra = SFD_IMU_RING_CAPACITY + 5;
+    for (int i = samples + 1; i <= samples + extra; ++i) handle_imu_at(5000 * (int64_t)i, 0.0);
+    const int rest_samples = (int)(cfg.nav.init_rest_s * 1e6) / 5000; /* 100 at 0.5 s */
+    const int first_needed = last_frame_sample - rest_samples;
+    const int newest_dropped = samples + extra - SFD_IMU_RING_CAPACITY;
+    assert_true(g_node.ring.lost == newest_dropped - first_needed + 1);
     assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == g_node.ring.lost);
 }
 
@@ -358,6 +392,7 @@ int main(void) {
         cmocka_unit_test(lcm_imu_and_camera_info_validated),
         cmocka_unit_test(lcm_node_follows_first_camera_even_with_negative_id),
         cmocka_unit_test(lcm_node_reports_imu_overflow_only_for_needed_samples),
+        cmocka_unit_test(lcm_node_waiting_filter_keeps_its_rest_window),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
