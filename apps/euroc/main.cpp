@@ -26,7 +26,6 @@
 #include <cstring>
 #include <dirent.h>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <sys/stat.h>
 #include <vector>
@@ -37,6 +36,8 @@
 #include "sfd_feature_tracker.hpp"
 #include "sfd_imu_t.h"
 #include "sfd_truth_t.h"
+#include "euroc_io.hpp"
+#include "lcm_log.hpp"
 
 namespace {
 
@@ -91,161 +92,6 @@ bool dir_exists(const std::string &p) {
     return ::stat(p.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
 }
 
-std::string trim(const std::string &s) {
-    size_t a = 0, b = s.size();
-    while (a < b && std::isspace(static_cast<unsigned char>(s[a]))) ++a;
-    while (b > a && std::isspace(static_cast<unsigned char>(s[b - 1]))) --b;
-    return s.substr(a, b - a);
-}
-
-// One data row of a EuRoC CSV: the ns timestamp and the remaining fields.
-struct Row {
-    int64_t t_ns;
-    std::vector<std::string> fields;  // after the timestamp, trimmed
-    int line;
-};
-
-// Reads a EuRoC CSV: '#' lines and blank lines skipped, comma-separated, first field an integer
-// timestamp (ns), strictly increasing, at least min_fields fields after it. On error: false and
-// "path:line: reason".
-bool read_csv(const std::string &path, size_t min_fields, std::vector<Row> *rows,
-              std::string *err) {
-    std::ifstream in(path);
-    if (!in) {
-        *err = path + ": cannot open";
-        return false;
-    }
-    std::string line;
-    int n = 0;
-    while (std::getline(in, line)) {
-        ++n;
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        const std::string t = trim(line);
-        if (t.empty() || t[0] == '#') continue;
-        std::vector<std::string> f;
-        std::stringstream ss(t);
-        std::string item;
-        while (std::getline(ss, item, ',')) f.push_back(trim(item));
-        const std::string where = path + ":" + std::to_string(n) + ": ";
-        if (f.size() < min_fields + 1) {
-            *err = where + "expected at least " + std::to_string(min_fields + 1) +
-                   " comma-separated fields, got " + std::to_string(f.size());
-            return false;
-        }
-        char *end = nullptr;
-        errno = 0;
-        const long long ts = std::strtoll(f[0].c_str(), &end, 10);
-        if (f[0].empty() || *end != '\0' || errno != 0 || ts < 0) {
-            *err = where + "timestamp '" + f[0] + "' is not a non-negative integer (ns)";
-            return false;
-        }
-        if (!rows->empty() && ts <= rows->back().t_ns) {
-            *err = where + "timestamp " + f[0] + " not after the previous row's";
-            return false;
-        }
-        f.erase(f.begin());
-        rows->push_back(Row{ts, f, n});
-    }
-    if (rows->empty()) {
-        *err = path + ": no data rows";
-        return false;
-    }
-    return true;
-}
-
-// Parses fields [0, count) of a row as finite doubles.
-bool row_numbers(const std::string &path, const Row &r, size_t count, double *out,
-                 std::string *err) {
-    for (size_t i = 0; i < count; ++i) {
-        char *end = nullptr;
-        out[i] = std::strtod(r.fields[i].c_str(), &end);
-        if (r.fields[i].empty() || *end != '\0' || !std::isfinite(out[i])) {
-            *err = path + ":" + std::to_string(r.line) + ": field " + std::to_string(i + 2) + " '" +
-                   r.fields[i] + "' is not a finite number";
-            return false;
-        }
-    }
-    return true;
-}
-
-struct Calib {
-    int width = 0, height = 0;
-    double fx = 0, fy = 0, cx = 0, cy = 0;
-    int model = SFD_DISTORTION_RADTAN;
-    double dist[4] = {0, 0, 0, 0};
-    double T_imu_cam[16] = {0};
-};
-
-bool read_seq(const cv::FileNode &n, size_t count, double *out) {
-    if (!n.isSeq() || n.size() != count) return false;
-    for (size_t i = 0; i < count; ++i) {
-        const cv::FileNode e = n[int(i)];
-        if (!e.isReal() && !e.isInt()) return false;
-        out[i] = double(e);
-        if (!std::isfinite(out[i])) return false;
-    }
-    return true;
-}
-
-// Reads an EuRoC camera sensor.yaml and checks it with the core's camera model and extrinsics.
-bool read_calib(const std::string &path, Calib *c, std::string *err) {
-    if (!file_exists(path)) {
-        *err = path + ": no such file";
-        return false;
-    }
-    cv::FileStorage fs;
-    try {
-        fs.open(path, cv::FileStorage::READ);
-    } catch (const cv::Exception &e) {
-        *err = path + ": not readable as YAML: " + e.msg;
-        return false;
-    }
-    if (!fs.isOpened()) {
-        *err =
-            path + ": not readable as YAML (cv::FileStorage; the file must begin with %YAML:1.0)";
-        return false;
-    }
-    const auto fail = [&](const std::string &why) {
-        *err = path + ": " + why;
-        return false;
-    };
-    const std::string model = fs["camera_model"].isString() ? std::string(fs["camera_model"]) : "";
-    if (model != "pinhole") return fail("camera_model must be 'pinhole', got '" + model + "'");
-    double res[2], intr[4];
-    if (!read_seq(fs["resolution"], 2, res)) return fail("resolution: expected [width, height]");
-    if (!read_seq(fs["intrinsics"], 4, intr)) return fail("intrinsics: expected [fu, fv, cu, cv]");
-    c->width = int(res[0]);
-    c->height = int(res[1]);
-    c->fx = intr[0];
-    c->fy = intr[1];
-    c->cx = intr[2];
-    c->cy = intr[3];
-    const std::string dm =
-        fs["distortion_model"].isString() ? std::string(fs["distortion_model"]) : "";
-    if (dm == "radial-tangential" || dm == "radtan") {
-        c->model = SFD_DISTORTION_RADTAN;
-    } else if (dm == "equidistant") {
-        c->model = SFD_DISTORTION_EQUIDISTANT;
-    } else {
-        return fail("distortion_model must be radial-tangential or equidistant, got '" + dm + "'");
-    }
-    if (!read_seq(fs["distortion_coefficients"], 4, c->dist))
-        return fail("distortion_coefficients: expected 4 numbers");
-    const cv::FileNode T = fs["T_BS"];
-    if (!T.isMap() || !read_seq(T["data"], 16, c->T_imu_cam))
-        return fail("T_BS: expected a map with data: [16 numbers] (row-major 4x4)");
-    sfd_camera_t cam;
-    if (sfd_camera_init(&cam, c->model, c->width, c->height, c->fx, c->fy, c->cx, c->cy, c->dist) !=
-        SFD_OK) {
-        return fail("the core camera model rejects this calibration (size, focal length)");
-    }
-    sfd_extrinsics_t ext;
-    if (sfd_extrinsics_from_matrix(&ext, c->T_imu_cam) != SFD_OK)
-        return fail(
-            "T_BS is not a rigid transform (rotation orthonormal within 1e-6, last row 0 0 0 1)");
-    return true;
-}
-
 struct Frame {
     int64_t t_ns;
     std::string path;
@@ -259,9 +105,11 @@ bool list_frames(const std::string &images, const std::string &frames_csv,
         return false;
     }
     if (!frames_csv.empty()) {
-        std::vector<Row> rows;
-        if (!read_csv(frames_csv, 1, &rows, err)) return false;
-        for (const Row &r : rows) frames->push_back(Frame{r.t_ns, images + "/" + r.fields[0]});
+        std::vector<sfdapp::EurocRow> rows;
+        if (!sfdapp::read_euroc_csv(frames_csv, 2, sfdapp::kAnyCols, &rows, err)) return false;
+        for (const sfdapp::EurocRow &r : rows) {
+            frames->push_back(Frame{r.t_ns, images + "/" + r.fields[0]});
+        }
         return true;
     }
     DIR *d = ::opendir(images.c_str());
@@ -466,27 +314,28 @@ int main(int argc, char **argv) {
         return 2;
     }
 
-    Calib calib;
+    sfdapp::EurocCamera calib;
     std::vector<Frame> frames;
-    std::vector<Row> imu_rows, gt_rows;
-    if (!read_calib(calib_yaml, &calib, &err) || !list_frames(images, frames_csv, &frames, &err) ||
-        !read_csv(imu_csv, 6, &imu_rows, &err) ||
-        (!gt_csv.empty() && !read_csv(gt_csv, 7, &gt_rows, &err))) {
+    std::vector<sfdapp::EurocRow> imu_rows, gt_rows;
+    if (!sfdapp::read_euroc_sensor_yaml(calib_yaml, &calib, &err) ||
+        !list_frames(images, frames_csv, &frames, &err) ||
+        !sfdapp::read_euroc_csv(imu_csv, 7, sfdapp::kAnyCols, &imu_rows, &err) ||
+        (!gt_csv.empty() && !sfdapp::read_euroc_csv(gt_csv, 8, sfdapp::kAnyCols, &gt_rows, &err))) {
         std::fprintf(stderr, "%s: %s\n", kProg, err.c_str());
         return 2;
     }
     if (max_frames > 0 && frames.size() > size_t(max_frames)) frames.resize(size_t(max_frames));
     std::vector<Pose> gt;
-    for (const Row &r : gt_rows) {
+    for (const sfdapp::EurocRow &r : gt_rows) {
         double v[7];
-        if (!row_numbers(gt_csv, r, 7, v, &err)) {
+        if (!sfdapp::euroc_row_numbers(gt_csv, r, 0, 7, v, &err)) {
             std::fprintf(stderr, "%s: %s\n", kProg, err.c_str());
             return 2;
         }
         Pose p{r.t_ns, {v[0], v[1], v[2]}, {v[3], v[4], v[5], v[6]}};
         const double qn = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
         if (!(std::fabs(qn - 1.0) < 1e-3)) {
-            std::fprintf(stderr, "%s: %s:%d: quaternion norm %.6f, expected 1 (w x y z)\n", kProg,
+            std::fprintf(stderr, "%s: %s:%ld: quaternion norm %.6f, expected 1 (w x y z)\n", kProg,
                          gt_csv.c_str(), r.line, qn);
             return 2;
         }
@@ -504,13 +353,13 @@ int main(int argc, char **argv) {
     const int64_t first_ns = frames.front().t_ns, last_ns = frames.back().t_ns;
     const int64_t imu_from_ns = first_ns - int64_t(imu_before_s * 1e9);
     long imu_written = 0, imu_skipped = 0;
-    for (const Row &r : imu_rows) {
+    for (const sfdapp::EurocRow &r : imu_rows) {
         if (r.t_ns < imu_from_ns || r.t_ns > last_ns + 50000000) {
             ++imu_skipped;  // outside [first frame - imu_before_s, last frame + 50 ms]
             continue;
         }
         double v[6];
-        if (!row_numbers(imu_csv, r, 6, v, &err)) {
+        if (!sfdapp::euroc_row_numbers(imu_csv, r, 0, 6, v, &err)) {
             std::fprintf(stderr, "%s: %s\n", kProg, err.c_str());
             return 2;
         }
@@ -531,19 +380,9 @@ int main(int argc, char **argv) {
     }
 
     static sfd_camera_info_t ci;
-    std::memset(&ci, 0, sizeof ci);
+    ci = sfdsim::camera_info_of(calib.camera, calib.T_BS);
     ci.utime = std::min(events.front().utime, first_ns / 1000);
     ci.camera_id = int32_t(camera_id);
-    ci.width = calib.width;
-    ci.height = calib.height;
-    ci.fx = calib.fx;
-    ci.fy = calib.fy;
-    ci.cx = calib.cx;
-    ci.cy = calib.cy;
-    ci.distortion_model = calib.model == SFD_DISTORTION_EQUIDISTANT ? SFD_CAMERA_INFO_T_EQUIDISTANT
-                                                                    : SFD_CAMERA_INFO_T_RADTAN;
-    std::memcpy(ci.distortion, calib.dist, sizeof ci.distortion);
-    std::memcpy(ci.T_imu_cam, calib.T_imu_cam, sizeof ci.T_imu_cam);
     add(ci.utime, -1, "CAMERA_INFO", sfd_camera_info_t_encode(buf.data(), 0, int(buf.size()), &ci));
 
     sfd::FeatureTracker tracker(tc);
@@ -564,10 +403,10 @@ int main(int argc, char **argv) {
             std::fprintf(stderr, "%s: %s: cannot read the image\n", kProg, f.path.c_str());
             return 2;
         }
-        if (img.cols != calib.width || img.rows != calib.height) {
+        if (img.cols != calib.camera.width_px || img.rows != calib.camera.height_px) {
             std::fprintf(stderr, "%s: %s: %dx%d image, calibration %s says %dx%d\n", kProg,
-                         f.path.c_str(), img.cols, img.rows, calib_yaml.c_str(), calib.width,
-                         calib.height);
+                         f.path.c_str(), img.cols, img.rows, calib_yaml.c_str(),
+                         calib.camera.width_px, calib.camera.height_px);
             return 2;
         }
         bool tracked = false;
@@ -644,12 +483,10 @@ int main(int argc, char **argv) {
         gt.empty() ? " (no ground truth given)" : " (poses only, no spurious labels)");
     // EuRoC ground truth also holds the estimated biases (fields 11-13: b_w, rad/s): printed for
     // the node's gyro_bias_rad_s (filter.init_from_truth starts the filter with that bias).
-    for (const Row &r : gt_rows) {
-        double v[10];
-        if (r.t_ns >= first_ns && r.fields.size() >= 13 && row_numbers(gt_csv, r, 10, v, &err)) {
+    for (const sfdapp::EurocRow &r : gt_rows) {
+        if (r.t_ns >= first_ns && r.fields.size() >= 13) {
             double bw[3];
-            const Row shifted{r.t_ns, {r.fields.begin() + 10, r.fields.begin() + 13}, r.line};
-            if (row_numbers(gt_csv, shifted, 3, bw, &err)) {
+            if (sfdapp::euroc_row_numbers(gt_csv, r, 10, 3, bw, &err)) {
                 std::printf(
                     "%s: ground-truth gyro bias at the first frame: [%.6f, %.6f, %.6f] "
                     "rad/s\n",

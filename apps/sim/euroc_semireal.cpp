@@ -48,6 +48,7 @@
 #include <string>
 #include <vector>
 
+#include "euroc_io.hpp"
 #include "lcm_log.hpp"
 #include "sfd/sfd.h"
 #include "sfd_feature_frame_t.h"
@@ -74,106 +75,35 @@ struct GtRow {
     long line;     // line in the CSV (error messages)
 };
 
-std::string trim(const std::string &s) {
-    size_t b = 0, e = s.size();
-    while (b < e && (s[b] == ' ' || s[b] == '\t' || s[b] == '\r')) ++b;
-    while (e > b && (s[e - 1] == ' ' || s[e - 1] == '\t' || s[e - 1] == '\r')) --e;
-    return s.substr(b, e - b);
-}
-
-// Reads a numeric CSV: comment lines (#) and blank lines skipped; every other line must hold
-// exactly `cols` comma-separated fields, the first an integer timestamp (ns, >= 0, strictly
-// increasing), the rest finite numbers. ts, rows and lines (1-based line numbers) receive one
-// entry per data line.
-bool read_csv(const std::string &path, size_t cols, std::vector<int64_t> *ts,
-              std::vector<std::vector<double>> *rows, std::vector<long> *lines, std::string *err) {
-    std::ifstream f(path);
-    if (!f) {
-        *err = path + ": cannot open";
-        return false;
-    }
-    std::string line;
-    long line_no = 0;
-    while (std::getline(f, line)) {
-        ++line_no;
-        const std::string t = trim(line);
-        if (t.empty() || t[0] == '#') continue;
-        std::vector<std::string> fields;
-        size_t start = 0;
-        for (;;) {
-            const size_t comma = t.find(',', start);
-            fields.push_back(trim(
-                t.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
-            if (comma == std::string::npos) break;
-            start = comma + 1;
-        }
-        const std::string where = path + ":" + std::to_string(line_no);
-        if (fields.size() != cols) {
-            *err = where + ": expected " + std::to_string(cols) + " comma-separated fields, got " +
-                   std::to_string(fields.size());
-            return false;
-        }
-        char *end = nullptr;
-        errno = 0;
-        const long long stamp = std::strtoll(fields[0].c_str(), &end, 10);
-        if (fields[0].empty() || *end != '\0' || errno != 0 || stamp < 0) {
-            *err = where + ": field 1: not a timestamp in ns (a non-negative integer): '" +
-                   fields[0] + "'";
-            return false;
-        }
-        if (!ts->empty() && stamp <= ts->back()) {
-            *err = where + ": timestamp " + fields[0] + " is not after the previous row's";
-            return false;
-        }
-        std::vector<double> v(cols - 1);
-        for (size_t k = 1; k < cols; ++k) {
-            end = nullptr;
-            const double x = std::strtod(fields[k].c_str(), &end);
-            if (fields[k].empty() || *end != '\0' || !std::isfinite(x)) {
-                *err = where + ": field " + std::to_string(k + 1) + ": not a finite number: '" +
-                       fields[k] + "'";
-                return false;
-            }
-            v[k - 1] = x;
-        }
-        ts->push_back(stamp);
-        rows->push_back(std::move(v));
-        lines->push_back(line_no);
-    }
-    if (ts->empty()) {
-        *err = path + ": no data rows";
-        return false;
-    }
-    return true;
-}
-
+// imu0/data.csv: timestamp, w_RS_S x y z (rad/s), a_RS_S x y z (m/s^2).
 bool read_imu(const std::string &path, std::vector<ImuRow> *out, std::string *err) {
-    std::vector<int64_t> ts;
-    std::vector<std::vector<double>> rows;
-    std::vector<long> lines;
-    if (!read_csv(path, 7, &ts, &rows, &lines, err)) return false;
-    out->resize(ts.size());
-    for (size_t i = 0; i < ts.size(); ++i) {
-        (*out)[i].t_ns = ts[i];
+    std::vector<sfdapp::EurocRow> rows;
+    if (!sfdapp::read_euroc_csv(path, 7, 7, &rows, err)) return false;
+    out->resize(rows.size());
+    for (size_t i = 0; i < rows.size(); ++i) {
+        double v[6];
+        if (!sfdapp::euroc_row_numbers(path, rows[i], 0, 6, v, err)) return false;
+        (*out)[i].t_ns = rows[i].t_ns;
         for (size_t k = 0; k < 3; ++k) {
-            (*out)[i].w[k] = rows[i][k];
-            (*out)[i].a[k] = rows[i][3 + k];
+            (*out)[i].w[k] = v[k];
+            (*out)[i].a[k] = v[3 + k];
         }
     }
     return true;
 }
 
+// state_groundtruth_estimate0/data.csv: timestamp, p (3), q_RS w x y z (4), v (3), b_w (3),
+// b_a (3).
 bool read_gt(const std::string &path, std::vector<GtRow> *out, std::string *err) {
-    std::vector<int64_t> ts;
-    std::vector<std::vector<double>> rows;
-    std::vector<long> lines;
-    if (!read_csv(path, 17, &ts, &rows, &lines, err)) return false;
-    out->resize(ts.size());
-    for (size_t i = 0; i < ts.size(); ++i) {
+    std::vector<sfdapp::EurocRow> rows;
+    if (!sfdapp::read_euroc_csv(path, 17, 17, &rows, err)) return false;
+    out->resize(rows.size());
+    for (size_t i = 0; i < rows.size(); ++i) {
         GtRow &g = (*out)[i];
-        const std::vector<double> &r = rows[i];
-        g.pose.t_ns = ts[i];
-        g.line = lines[i];
+        double r[16];
+        if (!sfdapp::euroc_row_numbers(path, rows[i], 0, 16, r, err)) return false;
+        g.pose.t_ns = rows[i].t_ns;
+        g.line = rows[i].line;
         for (size_t k = 0; k < 3; ++k) {
             g.pose.p_IinW_m[k] = r[k];
             g.v[k] = r[7 + k];
@@ -186,75 +116,10 @@ bool read_gt(const std::string &path, std::vector<GtRow> *out, std::string *err)
                       g.pose.q_ItoW[2] * g.pose.q_ItoW[2] + g.pose.q_ItoW[3] * g.pose.q_ItoW[3]);
         // EuRoC prints the quaternion to 6 decimals: its norm is 1 within about 1e-5.
         if (!(std::fabs(n - 1.0) < 1e-3) || sfd_quat_normalize(g.pose.q_ItoW) != SFD_OK) {
-            *err = path + ":" + std::to_string(lines[i]) +
+            *err = path + ":" + std::to_string(rows[i].line) +
                    ": q_RS (fields 5-8) is not a unit quaternion (norm " + std::to_string(n) + ")";
             return false;
         }
-    }
-    return true;
-}
-
-bool read_numbers(const cv::FileNode &n, const std::string &where, size_t count, double *out,
-                  std::string *err) {
-    if (!n.isSeq() || n.size() != count) {
-        *err = where + ": expected a list of " + std::to_string(count) + " numbers";
-        return false;
-    }
-    for (size_t k = 0; k < count; ++k) {
-        const cv::FileNode e = n[int(k)];
-        if (!e.isReal() && !e.isInt()) {
-            *err = where + ": element " + std::to_string(k + 1) + " is not a number";
-            return false;
-        }
-        out[k] = static_cast<double>(e);
-    }
-    return true;
-}
-
-// cam0/sensor.yaml (Kalibr / EuRoC): T_BS.data (row-major 4x4), resolution, camera_model
-// pinhole, intrinsics [fu fv cu cv], distortion_model radial-tangential or equidistant,
-// distortion_coefficients (4).
-bool read_sensor_yaml(const std::string &path, sfd_camera_t *cam, double T_BS[16],
-                      std::string *err) {
-    cv::FileStorage fs;
-    try {
-        if (!fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML)) {
-            *err = path + ": cannot open";
-            return false;
-        }
-        const cv::FileNode root = fs.root();
-        double res[2], intr[4], dist[4];
-        if (!read_numbers(root["T_BS"]["data"], path + ": T_BS.data", 16, T_BS, err) ||
-            !read_numbers(root["resolution"], path + ": resolution", 2, res, err) ||
-            !read_numbers(root["intrinsics"], path + ": intrinsics", 4, intr, err) ||
-            !read_numbers(root["distortion_coefficients"], path + ": distortion_coefficients", 4,
-                          dist, err)) {
-            return false;
-        }
-        const cv::FileNode cm = root["camera_model"], dm = root["distortion_model"];
-        if (!cm.isString() || static_cast<std::string>(cm) != "pinhole") {
-            *err = path + ": camera_model: expected \"pinhole\"";
-            return false;
-        }
-        const std::string dms = dm.isString() ? static_cast<std::string>(dm) : std::string();
-        int model = -1;
-        if (dms == "radial-tangential" || dms == "radtan") model = SFD_DISTORTION_RADTAN;
-        if (dms == "equidistant") model = SFD_DISTORTION_EQUIDISTANT;
-        if (model < 0) {
-            *err = path + ": distortion_model: expected radial-tangential or equidistant, got '" +
-                   dms + "'";
-            return false;
-        }
-        if (sfd_camera_init(cam, model, int(res[0]), int(res[1]), intr[0], intr[1], intr[2],
-                            intr[3], dist) != SFD_OK) {
-            *err = path +
-                   ": intrinsics/resolution/distortion_coefficients rejected by the "
-                   "camera model (non-positive focal length or size?)";
-            return false;
-        }
-    } catch (const cv::Exception &e) {
-        *err = path + ": not valid YAML (" + e.msg + ")";
-        return false;
     }
     return true;
 }
@@ -307,21 +172,20 @@ int write_semireal_log(const SemirealOptions &opt) {
     const std::string cam_path = mav + "/cam0/sensor.yaml";
     std::vector<ImuRow> imu;
     std::vector<GtRow> gt;
-    sfd_camera_t cam;
-    double T_BS[16];
+    sfdapp::EurocCamera calib;
     std::string err;
     if (!read_imu(imu_path, &imu, &err) || !read_gt(gt_path, &gt, &err) ||
-        !read_sensor_yaml(cam_path, &cam, T_BS, &err)) {
+        !sfdapp::read_euroc_sensor_yaml(cam_path, &calib, &err)) {
         std::fprintf(stderr, "sfd-sim: %s\n", err.c_str());
         return 2;
     }
+    const sfd_camera_t &cam = calib.camera;
+    const double *T_BS = calib.T_BS;
     sfd_extrinsics_t ext;
-    if (sfd_extrinsics_from_matrix(&ext, T_BS) != SFD_OK) {
-        std::fprintf(stderr,
-                     "sfd-sim: %s: T_BS: not a rigid transform (rotation block not "
-                     "orthonormal within 1e-6, or last row not 0 0 0 1)\n",
+    if (sfd_extrinsics_from_matrix(&ext, T_BS) != SFD_OK) {  // the reader checked it
+        std::fprintf(stderr, "sfd-sim: internal: %s: T_BS passed the reader, not the core\n",
                      cam_path.c_str());
-        return 2;
+        return 1;
     }
     // The overlap of IMU and ground truth (same clock): the log covers it only.
     const int64_t t_begin = std::max(imu.front().t_ns, gt.front().pose.t_ns);

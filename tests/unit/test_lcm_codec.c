@@ -275,42 +275,60 @@ static void handle_imu_at(int64_t utime, double accel_z_m_s2) {
     sfd_node_handle(&g_node, SFD_NODE_IMU, g_buf, n);
 }
 
-/* GIVEN a node fed 200 Hz IMU and 20 Hz frames for longer than its IMU ring holds (the filter
- * running, started at rest) WHEN the ring wraps over samples the frames have consumed THEN no
- * imu_overflow is reported and every frame is judged; WHEN IMU keeps arriving with no frame to
- * consume it THEN the drops of samples the next frame would need are reported. */
-static void lcm_node_reports_imu_overflow_only_for_needed_samples(void **state) {
-    (void)state;
-    SFD_REQ("SFD-LCM-004");
+/* Frames take their IMU index (a sample every 5 ms) in this file's IMU-ring tests. */
+typedef struct {
+    int samples;           /* 200 Hz samples handled, numbered 1.. (t = 5000 i us) */
+    int frames;            /* 20 Hz frames handled, at samples 5, 15, 25, ... */
+    int last_frame_sample; /* the sample of the last frame */
+} imu_feed_t;
+
+/* A fresh node (method PARITY, the filter on, start at rest) fed three ring spans of 200 Hz IMU
+ * whose accelerometer reads accel_z_m_s2, with a frame every 10 samples. */
+static imu_feed_t feed_node_imu_and_frames(double accel_z_m_s2) {
     sfd_node_config_t cfg;
     sfd_node_config_default(&cfg);
     cfg.params.method = SFD_METHOD_PARITY;
     assert_status(sfd_node_init(&g_node, &cfg, keep_verdict, NULL, NULL), SFD_OK);
     g_verdicts = 0;
     handle_camera_info(0);
-    const int samples = 3 * SFD_IMU_RING_CAPACITY; /* 30.72 s at 200 Hz */
-    int frames = 0;
-    int last_frame_sample = 0;
-    for (int i = 1; i <= samples; ++i) {
+    imu_feed_t f = {3 * SFD_IMU_RING_CAPACITY, 0, 0};
+    for (int i = 1; i <= f.samples; ++i) {
         const int64_t t = 5000 * (int64_t)i;
-        handle_imu_at(t, 9.81);
+        handle_imu_at(t, accel_z_m_s2);
         if (i % 10 == 5) {
             handle_frame(t, 0);
-            frames++;
-            last_frame_sample = i;
+            f.frames++;
+            f.last_frame_sample = i;
         }
     }
-    assert_true(g_node.ring.overwritten == samples - SFD_IMU_RING_CAPACITY);
+    assert_true(g_node.ring.overwritten == f.samples - SFD_IMU_RING_CAPACITY);
+    return f;
+}
+
+/* Then IMU alone for more than the ring's span; returns the index of the newest sample dropped. */
+static int feed_imu_past_the_ring(const imu_feed_t *f, double accel_z_m_s2) {
+    const int extra = SFD_IMU_RING_CAPACITY + 5;
+    for (int i = f->samples + 1; i <= f->samples + extra; ++i) {
+        handle_imu_at(5000 * (int64_t)i, accel_z_m_s2);
+    }
+    return f->samples + extra - SFD_IMU_RING_CAPACITY;
+}
+
+/* GIVEN a node fed 200 Hz IMU and 20 Hz frames for longer than its IMU ring holds (the filter
+ * running, started at rest) WHEN the ring wraps over samples the frames have consumed THEN no
+ * imu_overflow is reported and every frame is judged; WHEN IMU keeps arriving with no frame to
+ * consume it THEN exactly the drops of samples the next frame would need are reported: the next
+ * frame's interval starts at the last frame's sample. */
+static void lcm_node_reports_imu_overflow_only_for_needed_samples(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-004");
+    const imu_feed_t f = feed_node_imu_and_frames(9.81);
     assert_true(g_node.ring.lost == 0);
     assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == 0);
     assert_true(g_node.nav.ready == 1);
-    assert_int_equal(g_verdicts, frames);
-    /* no frame for more than the ring's span: the next frame's interval starts at the last
-     * frame's sample; that sample and every newer one overwritten is a loss, no older one is */
-    const int extra = SFD_IMU_RING_CAPACITY + 5;
-    for (int i = samples + 1; i <= samples + extra; ++i) handle_imu_at(5000 * (int64_t)i, 9.81);
-    const int newest_dropped = samples + extra - SFD_IMU_RING_CAPACITY; /* sample index */
-    assert_true(g_node.ring.lost == newest_dropped - last_frame_sample + 1);
+    assert_int_equal(g_verdicts, f.frames);
+    const int newest_dropped = feed_imu_past_the_ring(&f, 9.81);
+    assert_true(g_node.ring.lost == newest_dropped - f.last_frame_sample + 1);
     assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == g_node.ring.lost);
 }
 
@@ -321,29 +339,13 @@ static void lcm_node_reports_imu_overflow_only_for_needed_samples(void **state) 
 static void lcm_node_waiting_filter_keeps_its_rest_window(void **state) {
     (void)state;
     SFD_REQ("SFD-LCM-004");
-    sfd_node_config_t cfg;
-    sfd_node_config_default(&cfg);
-    cfg.params.method = SFD_METHOD_PARITY;
-    assert_status(sfd_node_init(&g_node, &cfg, keep_verdict, NULL, NULL), SFD_OK);
-    handle_camera_info(0);
-    const int samples = 3 * SFD_IMU_RING_CAPACITY;
-    int last_frame_sample = 0;
-    for (int i = 1; i <= samples; ++i) {
-        const int64_t t = 5000 * (int64_t)i;
-        handle_imu_at(t, 0.0);
-        if (i % 10 == 5) {
-            handle_frame(t, 0);
-            last_frame_sample = i;
-        }
-    }
+    const imu_feed_t f = feed_node_imu_and_frames(0.0);
     assert_int_equal(g_node.nav.ready, 0);
     assert_true(g_node.ring.lost == 0);
     assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == 0);
-    const int extra = SFD_IMU_RING_CAPACITY + 5;
-    for (int i = samples + 1; i <= samples + extra; ++i) handle_imu_at(5000 * (int64_t)i, 0.0);
-    const int rest_samples = (int)(cfg.nav.init_rest_s * 1e6) / 5000; /* 100 at 0.5 s */
-    const int first_needed = last_frame_sample - rest_samples;
-    const int newest_dropped = samples + extra - SFD_IMU_RING_CAPACITY;
+    const int newest_dropped = feed_imu_past_the_ring(&f, 0.0);
+    const int rest_samples = (int)(g_node.cfg.nav.init_rest_s * 1e6) / 5000; /* 100 at 0.5 s */
+    const int first_needed = f.last_frame_sample - rest_samples;
     assert_true(g_node.ring.lost == newest_dropped - first_needed + 1);
     assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == g_node.ring.lost);
 }
