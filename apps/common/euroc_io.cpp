@@ -126,13 +126,23 @@ bool euroc_row_numbers(const std::string &path, const EurocRow &row, std::size_t
 }
 
 bool read_euroc_sensor_yaml(const std::string &path, EurocCamera *out, std::string *err) {
+    if (!std::ifstream(path)) {  // before OpenCV, which would print its own line about it
+        *err = path + ": cannot open";
+        return false;
+    }
     cv::FileStorage fs;
     try {
-        if (!fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML)) {
-            *err = path + ": cannot open (or not YAML beginning with %YAML:1.0)";
+        if (!fs.open(path, cv::FileStorage::READ)) {
+            *err = path +
+                   ": not readable as YAML (cv::FileStorage; the file must begin with "
+                   "%YAML:1.0)";
             return false;
         }
         const cv::FileNode root = fs.root();
+        if (!root["T_BS"].isMap()) {
+            *err = path + ": T_BS: expected a map with data: [16 numbers] (row-major 4x4)";
+            return false;
+        }
         double res[2], intr[4], dist[4];
         if (!read_numbers(root["T_BS"]["data"], path + ": T_BS.data", 16, out->T_BS, err) ||
             !read_numbers(root["resolution"], path + ": resolution", 2, res, err) ||

@@ -43,7 +43,8 @@ bool euroc_row_numbers(const std::string &path, const EurocRow &row, std::size_t
 /// [fu, fv, cu, cv], distortion_model radial-tangential (or radtan) or equidistant,
 /// distortion_coefficients (4), T_BS.data (16, row-major: the camera's pose in the body (IMU)
 /// frame). Read with OpenCV's cv::FileStorage (the file must begin with %YAML:1.0); the camera is
-/// checked by sfd_camera_init and T_BS by sfd_extrinsics_from_matrix.
+/// checked by sfd_camera_init and T_BS by sfd_extrinsics_from_matrix. A whole-number resolution
+/// is required (EuRoC writes [752, 480]).
 struct EurocCamera {
     sfd_camera_t camera{};
     double T_BS[16] = {};

@@ -36,10 +36,7 @@
 // before and after it (as apps/sim/flight_log.cpp labels its mistracks).
 #include "euroc_semireal.hpp"
 
-#include <opencv2/core.hpp>
-
 #include <algorithm>
-#include <cerrno>
 #include <cinttypes>
 #include <cmath>
 #include <cstdlib>

@@ -53,6 +53,11 @@ class LogWriter {
 
 /// CAMERA_INFO of camera 0: the calibration and T_imu_cam (row-major 4x4, camera pose in the IMU
 /// frame); utime is set by the caller at each publication.
+static_assert(SFD_CAMERA_INFO_T_PINHOLE == SFD_DISTORTION_PINHOLE &&
+                  SFD_CAMERA_INFO_T_RADTAN == SFD_DISTORTION_RADTAN &&
+                  SFD_CAMERA_INFO_T_EQUIDISTANT == SFD_DISTORTION_EQUIDISTANT,
+              "camera_info_of copies the core's distortion model as the wire's");
+
 inline sfd_camera_info_t camera_info_of(const sfd_camera_t &cam, const double T_imu_cam[16]) {
     sfd_camera_info_t ci;
     std::memset(&ci, 0, sizeof ci);
