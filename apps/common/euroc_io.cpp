@@ -13,6 +13,14 @@
 namespace sfdapp {
 namespace {
 
+// The parts joined, for error messages built inside loops (one string, appended to).
+template <typename... Parts>
+std::string cat(const Parts &...parts) {
+    std::string s;
+    ((s += parts), ...);
+    return s;
+}
+
 std::string trim(const std::string &s) {
     std::size_t a = 0, b = s.size();
     while (a < b && std::isspace(static_cast<unsigned char>(s[a]))) ++a;
@@ -45,7 +53,7 @@ bool read_numbers(const cv::FileNode &n, const std::string &where, std::size_t c
         const cv::FileNode e = n[static_cast<int>(k)];
         out[k] = (e.isReal() || e.isInt()) ? static_cast<double>(e) : NAN;
         if (!std::isfinite(out[k])) {
-            *err = where + ": element " + std::to_string(k + 1) + " is not a finite number";
+            *err = cat(where, ": element ", std::to_string(k + 1), " is not a finite number");
             return false;
         }
     }
@@ -71,24 +79,25 @@ bool read_euroc_csv(const std::string &path, std::size_t min_cols, std::size_t m
         std::vector<std::string> fields = split_fields(t);
         const std::string where = path + ":" + std::to_string(line_no);
         if (fields.size() < min_cols || fields.size() > max_cols) {
-            const std::string want = min_cols == max_cols   ? std::to_string(min_cols)
-                                     : max_cols == kAnyCols ? "at least " + std::to_string(min_cols)
-                                                            : std::to_string(min_cols) + " to " +
-                                                                  std::to_string(max_cols);
-            *err = where + ": expected " + want + " comma-separated fields, got " +
-                   std::to_string(fields.size());
+            const std::string want =
+                min_cols == max_cols ? std::to_string(min_cols)
+                : max_cols == kAnyCols
+                    ? cat("at least ", std::to_string(min_cols))
+                    : cat(std::to_string(min_cols), " to ", std::to_string(max_cols));
+            *err = cat(where, ": expected ", want, " comma-separated fields, got ",
+                       std::to_string(fields.size()));
             return false;
         }
         char *end = nullptr;
         errno = 0;
         const long long stamp = std::strtoll(fields[0].c_str(), &end, 10);
         if (fields[0].empty() || *end != '\0' || errno != 0 || stamp < 0) {
-            *err = where + ": field 1: not a timestamp in ns (a non-negative integer): '" +
-                   fields[0] + "'";
+            *err = cat(where, ": field 1: not a timestamp in ns (a non-negative integer): '",
+                       fields[0], "'");
             return false;
         }
         if (!rows->empty() && stamp <= rows->back().t_ns) {
-            *err = where + ": timestamp " + fields[0] + " is not after the previous row's";
+            *err = cat(where, ": timestamp ", fields[0], " is not after the previous row's");
             return false;
         }
         fields.erase(fields.begin());
@@ -112,13 +121,13 @@ bool euroc_row_numbers(const std::string &path, const EurocRow &row, std::size_t
         const std::size_t k = first + i;
         const std::string column = std::to_string(k + 2);  // the timestamp is column 1
         if (k >= row.fields.size()) {
-            *err = where + ": field " + column + ": missing";
+            *err = cat(where, ": field ", column, ": missing");
             return false;
         }
         char *end = nullptr;
         out[i] = std::strtod(row.fields[k].c_str(), &end);
         if (row.fields[k].empty() || *end != '\0' || !std::isfinite(out[i])) {
-            *err = where + ": field " + column + ": not a finite number: '" + row.fields[k] + "'";
+            *err = cat(where, ": field ", column, ": not a finite number: '", row.fields[k], "'");
             return false;
         }
     }

@@ -108,7 +108,10 @@ bool list_frames(const std::string &images, const std::string &frames_csv,
         if (!sfdapp::read_euroc_csv(frames_csv, 2, sfdapp::kAnyCols, &rows, err)) return false;
         for (const sfdapp::EurocRow &r : rows) {
             if (r.fields[0].empty()) {
-                *err = frames_csv + ":" + std::to_string(r.line) + ": field 2: no image file name";
+                err->assign(frames_csv)
+                    .append(":")
+                    .append(std::to_string(r.line))
+                    .append(": field 2: no image file name");
                 return false;
             }
             frames->push_back(Frame{r.t_ns, images + "/" + r.fields[0]});
