@@ -64,6 +64,6 @@ kill -INT "$node" 2>/dev/null || true
 wait "$node" || node_rc=$?
 cat "$out/report.txt"
 echo
-grep '^sfd-node: \(stopped\|rejected\|heap\)' "$out/node.txt" || true
+grep '^sfd-node: \(stopped\|publish\|rejected\|heap\)' "$out/node.txt" || true
 if [ "$node_rc" -ne 0 ]; then echo "hil_bench: sfd-node exited $node_rc" >&2; exit 1; fi
 exit "$rc"

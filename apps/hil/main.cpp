@@ -78,7 +78,7 @@ struct Options {
     double random_fraction = 1.0;
     double rate = 1.0;
     long budget_us = 0;  // 0: no deadline
-    bool budget_e2e = false;
+    enum BudgetOf { kNode, kE2e, kProcessing } budget_of = kNode;
     std::string csv, png;
     long timeout_ms = 1000;
     long warmup = 10;
@@ -95,6 +95,7 @@ struct Frame {
     int32_t verdict_features = -1;
     bool timing = false;
     int32_t ingest_us = 0, parity_us = 0, association_us = 0, update_us = 0, total_us = 0;
+    int32_t publish_us = 0;  // of total_us: the node's sends of SFD_VERDICT and SFD_STATE
     int32_t hypotheses = 0;
     int8_t budget_exhausted = 0;
 };
@@ -159,6 +160,7 @@ void on_timing(const lcm_recv_buf_t *rbuf, const char *, void *) {
     f.association_us = t.association_us;
     f.update_us = t.update_us;
     f.total_us = t.total_us;
+    f.publish_us = t.publish_us;
     f.hypotheses = t.hypotheses_used;
     f.budget_exhausted = t.budget_exhausted;
     if (!g.have_first_timing) {
@@ -358,7 +360,8 @@ void usage(FILE *out) {
         "  --rate R           pace: R x the recorded pace (1.0); 0 = closed loop, each frame\n"
         "                     published as soon as the previous verdict arrived or timed out\n"
         "  --budget-us N      deadline per frame in us (none by default)\n"
-        "  --budget-of W      node: SFD_TIMING total_us (default); e2e: end-to-end latency\n"
+        "  --budget-of W      node: SFD_TIMING total_us (default); processing: total_us -\n"
+        "                     publish_us (the node without its sends); e2e: end-to-end\n"
         "  --lcm-url URL      LCM provider (default: the config's, "
         "udpm://239.255.76.67:7667?ttl=0)\n"
         "  --csv F            one row per frame\n"
@@ -472,8 +475,12 @@ int main(int argc, char **argv) {
             opt.budget_us = v;
         } else if (!std::strcmp(a, "--budget-of") && has) {
             const std::string w = argv[++i];
-            if (w != "e2e" && w != "node") return bad("e2e or node");
-            opt.budget_e2e = w == "e2e";
+            if (w != "e2e" && w != "node" && w != "processing") {
+                return bad("node, processing or e2e");
+            }
+            opt.budget_of = w == "e2e"    ? Options::kE2e
+                            : w == "node" ? Options::kNode
+                                          : Options::kProcessing;
         } else if (!std::strcmp(a, "--lcm-url") && has) {
             lcm_url = argv[++i];
         } else if (!std::strcmp(a, "--csv") && has) {
@@ -617,7 +624,7 @@ int main(int argc, char **argv) {
     long no_verdict = 0, late = 0, measured = 0, misses = 0, exhausted = 0, timed = 0;
     long hyp_max = 0;
     double hyp_sum = 0;
-    std::vector<double> e2e, node, lateness, period_err;
+    std::vector<double> e2e, node, processing, publishing, lateness, period_err;
     for (size_t i = 0; i < fr.size(); ++i) {
         const Frame &f = fr[i];
         const bool got = f.verdict_ns >= 0;
@@ -639,12 +646,17 @@ int main(int argc, char **argv) {
         if (f.timing) {
             ++timed;
             node.push_back(double(f.total_us));
+            processing.push_back(double(f.total_us - f.publish_us));
+            publishing.push_back(double(f.publish_us));
             exhausted += f.budget_exhausted ? 1 : 0;
             hyp_sum += f.hypotheses;
             hyp_max = std::max<long>(hyp_max, f.hypotheses);
         }
         if (opt.budget_us > 0) {
-            const double x = opt.budget_e2e ? e : (f.timing ? double(f.total_us) : 0.0);
+            const double x = opt.budget_of == Options::kE2e    ? e
+                             : !f.timing                       ? 0.0
+                             : opt.budget_of == Options::kNode ? double(f.total_us)
+                                                               : double(f.total_us - f.publish_us);
             if (x > double(opt.budget_us)) ++misses;
         }
     }
@@ -670,7 +682,7 @@ int main(int argc, char **argv) {
     }
     const long lost = no_verdict + late + g.unknown_verdicts + node_drops;
     const Stats se = stats_of(e2e), sn = stats_of(node), sl = stats_of(lateness),
-                sp = stats_of(period_err);
+                sp = stats_of(period_err), sc = stats_of(processing), sb = stats_of(publishing);
 
     std::printf("\n| sfd-hil | %s, rate %s, timeout %ld ms, warm-up %ld |\n", source.c_str(), rate,
                 opt.timeout_ms, opt.warmup);
@@ -702,6 +714,8 @@ int main(int argc, char **argv) {
     };
     row("end-to-end", se);
     row("node total_us", sn);
+    row("node processing (total_us - publish_us)", sc);
+    row("node publish_us (sends of SFD_VERDICT, SFD_STATE)", sb);
     std::printf("\n| jitter | value |\n| --- | --- |\n");
     std::printf("| end-to-end: std / p99 - median | %.1f / %.0f us |\n", se.sd, se.p99 - se.median);
     if (opt.rate > 0) {
@@ -718,8 +732,10 @@ int main(int argc, char **argv) {
     std::printf("| frames with budget_exhausted | %ld of %ld |\n", exhausted, timed);
     if (opt.budget_us > 0) {
         std::printf("| deadline misses (%s > %ld us) | %ld of %ld |\n",
-                    opt.budget_e2e ? "end-to-end" : "node total_us", opt.budget_us, misses,
-                    measured);
+                    opt.budget_of == Options::kE2e    ? "end-to-end"
+                    : opt.budget_of == Options::kNode ? "node total_us"
+                                                      : "node processing",
+                    opt.budget_us, misses, measured);
     } else {
         std::printf("| deadline misses | no --budget-us |\n");
     }
@@ -738,7 +754,7 @@ int main(int argc, char **argv) {
         std::fprintf(csv,
                      "frame,utime,features,sched_lateness_us,e2e_us,node_total_us,ingest_us,"
                      "parity_us,association_us,update_us,hypotheses,budget_exhausted,verdict,"
-                     "timing,warmup,lost\n");
+                     "timing,warmup,lost,publish_us\n");
         for (size_t i = 0; i < fr.size(); ++i) {
             const Frame &f = fr[i];
             const bool got = f.verdict_ns >= 0;
@@ -760,8 +776,13 @@ int main(int argc, char **argv) {
             } else {
                 std::fprintf(csv, ",,,,,,,");
             }
-            std::fprintf(csv, "%d,%d,%d,%d\n", got ? 1 : 0, f.timing ? 1 : 0,
+            std::fprintf(csv, "%d,%d,%d,%d,", got ? 1 : 0, f.timing ? 1 : 0,
                          long(i) < opt.warmup ? 1 : 0, in_time ? 0 : 1);
+            if (f.timing) {
+                std::fprintf(csv, "%d\n", f.publish_us);
+            } else {
+                std::fprintf(csv, "\n");
+            }
         }
         if (std::fclose(csv) != 0) {
             std::fprintf(stderr, "sfd-hil: --csv: writing %s failed\n", opt.csv.c_str());

@@ -8,6 +8,7 @@
 #include <sched.h>
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <cerrno>
 
 #include <chrono>
@@ -42,10 +43,21 @@ struct Node {
     unsigned long long heap_publish = 0;     // inside lcm_publish
     unsigned long long messages = 0;
     bool started = false;  // counting starts after the first message (start-up)
+    // Time inside lcm_publish (the kernel's UDP send path included): the largest, and how many
+    // calls took over 1 ms. It is part of the frame time SFD_TIMING reports.
+    int64_t publish_max_us = 0;
+    long publish_over_1ms = 0;
+    long publishes = 0;
 };
 
 Node g_app;
 sfd_node_t g_node;  // ~0.3 MiB: static, allocated at load time, not on the heap
+
+int64_t clock_us(void *) {
+    return std::chrono::duration_cast<std::chrono::microseconds>(
+               std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
 
 void on_publish(void *ctx, sfd_node_output_t kind, const void *data, int32_t size, int64_t) {
     Node *app = static_cast<Node *>(ctx);
@@ -53,16 +65,15 @@ void on_publish(void *ctx, sfd_node_output_t kind, const void *data, int32_t siz
                             : kind == SFD_NODE_OUT_STATE ? app->cfg.channels.state
                                                          : app->cfg.channels.timing;
     const unsigned long long h0 = app->heap_count ? app->heap_count() : 0;
+    const int64_t t0 = clock_us(nullptr);
     if (lcm_publish(app->lcm, ch.c_str(), data, static_cast<unsigned int>(size)) != 0) {
         ++app->publish_failures;
     }
+    const int64_t dt = clock_us(nullptr) - t0;
+    app->publish_max_us = std::max(app->publish_max_us, dt);
+    app->publish_over_1ms += dt > 1000 ? 1 : 0;
+    ++app->publishes;
     if (app->heap_count) app->heap_publish += app->heap_count() - h0;
-}
-
-int64_t clock_us(void *) {
-    return std::chrono::duration_cast<std::chrono::microseconds>(
-               std::chrono::steady_clock::now().time_since_epoch())
-        .count();
 }
 
 sfd_node_input_t g_kinds[4] = {SFD_NODE_IMU, SFD_NODE_CAMERA_INFO, SFD_NODE_FEATURES,
@@ -324,6 +335,8 @@ int main(int argc, char **argv) {
         static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_processed),
         static_cast<long long>(c.frames_untested), static_cast<long long>(c.imu_in),
         static_cast<long long>(c.camera_info_in), g_app.publish_failures);
+    std::printf("sfd-node: publish: %ld calls, longest %lld us, %ld over 1 ms\n", g_app.publishes,
+                static_cast<long long>(g_app.publish_max_us), g_app.publish_over_1ms);
     std::printf("sfd-node: rejected:");
     for (int k = 0; k < SFD_REJECT_NUM_REASONS; ++k) {
         std::printf(" %s=%lld", sfd_reject_reason_str(k), static_cast<long long>(c.rejected[k]));

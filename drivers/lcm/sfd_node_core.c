@@ -69,7 +69,17 @@ sfd_status_t sfd_node_init(sfd_node_t *node, const sfd_node_config_t *cfg,
     return SFD_OK;
 }
 
-static void publish_state(sfd_node_t *n, int64_t utime) {
+/* Hands the first size bytes of out_buf to the publish callback; returns the time it took (the
+ * transport's send path, reported as SFD_TIMING.publish_us). */
+static int64_t send_out(sfd_node_t *n, sfd_node_output_t kind, int size, int64_t utime) {
+    if (size <= 0) return 0;
+    const int64_t t0 = now_us(n);
+    n->publish(n->ctx, kind, n->out_buf, size, utime);
+    return now_us(n) - t0;
+}
+
+/* SFD_STATE after the frame; returns the time spent in the publish callback. */
+static int64_t publish_state(sfd_node_t *n, int64_t utime) {
     const sfd_ekf_t *e = &n->nav.ekf;
     sfd_nav_state_t *s = &n->wire_state;
     s->utime = utime;
@@ -80,7 +90,7 @@ static void publish_state(sfd_node_t *n, int64_t utime) {
     }
     for (int k = 0; k < 4; ++k) s->orientation[k] = e->q_ItoW[k];
     const int size = sfd_nav_state_t_encode(n->out_buf, 0, SFD_NODE_MAX_MESSAGE, s);
-    if (size > 0) n->publish(n->ctx, SFD_NODE_OUT_STATE, n->out_buf, size, utime);
+    return send_out(n, SFD_NODE_OUT_STATE, size, utime);
 }
 
 typedef struct {
@@ -110,10 +120,10 @@ static void publish_results(sfd_node_t *n, const sfd_frame_t *frame, const stage
     memset(&w->statistic[frame->num_features], 0, sizeof(double) * (size_t)rest);
     memset(&w->stage[frame->num_features], 0, (size_t)rest);
     int size = sfd_feature_verdict_t_encode(n->out_buf, 0, SFD_NODE_MAX_MESSAGE, w);
-    if (size > 0) n->publish(n->ctx, SFD_NODE_OUT_VERDICT, n->out_buf, size, frame->utime);
+    int64_t publish_us = send_out(n, SFD_NODE_OUT_VERDICT, size, frame->utime);
     n->counters.frames_processed++;
     if (v->num_consistent + v->num_spurious == 0) n->counters.frames_untested++;
-    if (n->cfg.nav.enabled && n->nav.ready) publish_state(n, frame->utime);
+    if (n->cfg.nav.enabled && n->nav.ready) publish_us += publish_state(n, frame->utime);
     if (!n->cfg.publish_timing) return;
     sfd_timing_t *t = &n->wire_timing;
     memset(t, 0, sizeof *t);
@@ -126,9 +136,10 @@ static void publish_results(sfd_node_t *n, const sfd_frame_t *frame, const stage
     t->hypotheses_used = st->hypotheses_used;
     t->budget_exhausted = st->budget_exhausted;
     t->total_us = clamp_i32(now_us(n) - t_start + ingest_us);
+    t->publish_us = clamp_i32(publish_us);
     for (int k = 0; k < SFD_REJECT_NUM_REASONS; ++k) t->rejected[k] = n->counters.rejected[k];
     size = sfd_timing_t_encode(n->out_buf, 0, SFD_NODE_MAX_MESSAGE, t);
-    if (size > 0) n->publish(n->ctx, SFD_NODE_OUT_TIMING, n->out_buf, size, frame->utime);
+    (void)send_out(n, SFD_NODE_OUT_TIMING, size, frame->utime);
 }
 
 /* Every feature UNTESTED, stage none: the verdict of a frame the detector could not judge. */

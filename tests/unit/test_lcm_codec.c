@@ -350,6 +350,59 @@ static void lcm_node_waiting_filter_keeps_its_rest_window(void **state) {
     assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == g_node.ring.lost);
 }
 
+static int64_t g_fake_now_us;
+static sfd_timing_t g_last_timing;
+static int g_timings;
+
+static int64_t fake_clock(void *ctx) {
+    (void)ctx;
+    return g_fake_now_us;
+}
+
+/* A transport whose sends take time: 100 us per verdict, 10 per state, 1000 per timing message;
+ * nothing else moves the clock. */
+static void slow_publish(void *ctx, sfd_node_output_t kind, const void *data, int32_t size,
+                         int64_t utime) {
+    (void)ctx;
+    (void)utime;
+    if (kind == SFD_NODE_OUT_VERDICT) g_fake_now_us += 100;
+    if (kind == SFD_NODE_OUT_STATE) g_fake_now_us += 10;
+    if (kind == SFD_NODE_OUT_TIMING) {
+        g_fake_now_us += 1000;
+        assert_int_equal(sfd_timing_t_decode(data, 0, size, &g_last_timing), size);
+        g_timings++;
+    }
+}
+
+/* GIVEN a transport whose sends take time and a node that spends none of its own WHEN frames are
+ * judged THEN SFD_TIMING's publish_us is the time inside the sends of the verdict (and, once the
+ * filter runs, the state), total_us includes it, and the timing message's own send is in
+ * neither. */
+static void lcm_node_reports_its_send_time_as_publish_us(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-004");
+    sfd_node_config_t cfg;
+    sfd_node_config_default(&cfg);
+    cfg.params.method = SFD_METHOD_PARITY;
+    g_fake_now_us = 0;
+    g_timings = 0;
+    assert_status(sfd_node_init(&g_node, &cfg, slow_publish, fake_clock, NULL), SFD_OK);
+    handle_camera_info(0);
+    handle_imu_at(5000, 9.81);
+    handle_imu_at(10000, 9.81);
+    handle_frame(10000, 0); /* the filter waits for 0.5 s of rest: a verdict, no state */
+    assert_int_equal(g_timings, 1);
+    assert_int_equal(g_last_timing.publish_us, 100);
+    assert_int_equal(g_last_timing.total_us, 100);
+    for (int i = 3; i <= 200; ++i) {
+        handle_imu_at(5000 * (int64_t)i, 9.81);
+        if (i % 10 == 0) handle_frame(5000 * (int64_t)i, 0);
+    }
+    assert_int_equal(g_node.nav.ready, 1); /* the filter runs: verdict and state each frame */
+    assert_int_equal(g_last_timing.publish_us, 110);
+    assert_int_equal(g_last_timing.total_us, 110);
+}
+
 /* GIVEN a node configured to follow the first camera WHEN the first calibration carries a
  * negative camera_id THEN the node follows that camera and no other: a later CAMERA_INFO and
  * FEATURES of another camera are rejected (CAMERA_ID) and verdicts name the followed camera.
@@ -395,6 +448,7 @@ int main(void) {
         cmocka_unit_test(lcm_node_follows_first_camera_even_with_negative_id),
         cmocka_unit_test(lcm_node_reports_imu_overflow_only_for_needed_samples),
         cmocka_unit_test(lcm_node_waiting_filter_keeps_its_rest_window),
+        cmocka_unit_test(lcm_node_reports_its_send_time_as_publish_us),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
