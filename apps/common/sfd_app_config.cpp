@@ -3,6 +3,8 @@
 
 #include <opencv2/core.hpp>
 
+#include <cerrno>
+#include <cstdlib>
 #include <set>
 
 namespace sfdapp {
@@ -279,6 +281,15 @@ bool validate(const AppConfig &cfg, std::string *error) {
              std::to_string(SFD_MAX_WINDOW) + ", group_size 1.." + std::to_string(SFD_MAX_GROUP) +
              ", default_depth_m > 0, default_depth_var_m2 >= 0, max_imu_gap_us > 0, 0/1 flags";
     return false;
+}
+
+bool parse_long(const char *s, long lo, long hi, long *out) {
+    char *end = nullptr;
+    errno = 0;
+    const long v = std::strtol(s, &end, 10);
+    if (end == s || *end != '\0' || errno != 0 || v < lo || v > hi) return false;
+    *out = v;
+    return true;
 }
 
 }  // namespace sfdapp

@@ -38,6 +38,9 @@ bool set_method(const std::string &name, AppConfig *cfg, std::string *error);
 /// Validates the detector parameters; false with a reason naming the first bad one.
 bool validate(const AppConfig &cfg, std::string *error);
 
+/// A command-line integer: the whole of s in base 10, within [lo, hi]; false otherwise.
+bool parse_long(const char *s, long lo, long hi, long *out);
+
 }  // namespace sfdapp
 
 #endif

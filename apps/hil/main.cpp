@@ -69,6 +69,9 @@ uint32_t get_be32(const uint8_t *p) {
     return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | p[3];
 }
 
+// What --budget-of applies the deadline to, as the report names it (Options::BudgetOf order).
+constexpr const char *kBudgetOfNames[] = {"node total_us", "end-to-end", "node processing"};
+
 struct Options {
     std::string log_path;
     std::string sim;
@@ -77,8 +80,8 @@ struct Options {
     uint64_t seed = 1;
     double random_fraction = 1.0;
     double rate = 1.0;
-    long budget_us = 0;  // 0: no deadline
-    enum BudgetOf { kNode, kE2e, kProcessing } budget_of = kNode;
+    long budget_us = 0;                                            // 0: no deadline
+    enum BudgetOf { kNode, kE2e, kProcessing } budget_of = kNode;  // kBudgetOfNames
     std::string csv, png;
     long timeout_ms = 1000;
     long warmup = 10;
@@ -379,15 +382,6 @@ void usage(FILE *out) {
         SFD_MAX_FEATURES);
 }
 
-bool parse_long(const char *s, long lo, long hi, long *out) {
-    char *end = nullptr;
-    errno = 0;
-    const long v = std::strtol(s, &end, 10);
-    if (end == s || *end != '\0' || errno != 0 || v < lo || v > hi) return false;
-    *out = v;
-    return true;
-}
-
 bool parse_double(const char *s, double lo, double hi, double *out) {
     char *end = nullptr;
     const double v = std::strtod(s, &end);
@@ -458,20 +452,22 @@ int main(int argc, char **argv) {
         } else if (!std::strcmp(a, "--config") && has) {
             config_path = argv[++i];
         } else if (!std::strcmp(a, "--frames") && has) {
-            if (!parse_long(argv[++i], 1, 1000000, &v)) return bad("1..1000000");
+            if (!sfdapp::parse_long(argv[++i], 1, 1000000, &v)) return bad("1..1000000");
             opt.frames = static_cast<int>(v);
         } else if (!std::strcmp(a, "--features") && has) {
-            if (!parse_long(argv[++i], 1, SFD_MAX_FEATURES, &v)) return bad("1..SFD_MAX_FEATURES");
+            if (!sfdapp::parse_long(argv[++i], 1, SFD_MAX_FEATURES, &v))
+                return bad("1..SFD_MAX_FEATURES");
             opt.features = static_cast<int>(v);
         } else if (!std::strcmp(a, "--seed") && has) {
-            if (!parse_long(argv[++i], 0, 2147483647L, &v)) return bad("a non-negative integer");
+            if (!sfdapp::parse_long(argv[++i], 0, 2147483647L, &v))
+                return bad("a non-negative integer");
             opt.seed = static_cast<uint64_t>(v);
         } else if (!std::strcmp(a, "--random-fraction") && has) {
             if (!parse_double(argv[++i], 0.0, 1.0, &opt.random_fraction)) return bad("0..1");
         } else if (!std::strcmp(a, "--rate") && has) {
             if (!parse_double(argv[++i], 0.0, 1000.0, &opt.rate)) return bad("0..1000");
         } else if (!std::strcmp(a, "--budget-us") && has) {
-            if (!parse_long(argv[++i], 1, 100000000, &v)) return bad("1..100000000");
+            if (!sfdapp::parse_long(argv[++i], 1, 100000000, &v)) return bad("1..100000000");
             opt.budget_us = v;
         } else if (!std::strcmp(a, "--budget-of") && has) {
             const std::string w = argv[++i];
@@ -488,10 +484,10 @@ int main(int argc, char **argv) {
         } else if (!std::strcmp(a, "--png") && has) {
             opt.png = argv[++i];
         } else if (!std::strcmp(a, "--timeout-ms") && has) {
-            if (!parse_long(argv[++i], 1, 600000, &v)) return bad("1..600000");
+            if (!sfdapp::parse_long(argv[++i], 1, 600000, &v)) return bad("1..600000");
             opt.timeout_ms = v;
         } else if (!std::strcmp(a, "--warmup") && has) {
-            if (!parse_long(argv[++i], 0, 10000000, &v)) return bad("0..10000000");
+            if (!sfdapp::parse_long(argv[++i], 0, 10000000, &v)) return bad("0..10000000");
             opt.warmup = v;
         } else if (!std::strcmp(a, "--no-restamp")) {
             opt.restamp = false;
@@ -732,10 +728,7 @@ int main(int argc, char **argv) {
     std::printf("| frames with budget_exhausted | %ld of %ld |\n", exhausted, timed);
     if (opt.budget_us > 0) {
         std::printf("| deadline misses (%s > %ld us) | %ld of %ld |\n",
-                    opt.budget_of == Options::kE2e    ? "end-to-end"
-                    : opt.budget_of == Options::kNode ? "node total_us"
-                                                      : "node processing",
-                    opt.budget_us, misses, measured);
+                    kBudgetOfNames[opt.budget_of], opt.budget_us, misses, measured);
     } else {
         std::printf("| deadline misses | no --budget-us |\n");
     }

@@ -14,7 +14,6 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -155,16 +154,6 @@ bool lock_memory(const Realtime &rt) {
     return true;
 }
 
-// Parses a decimal int in [lo, hi]; false otherwise.
-bool parse_int(const char *s, int lo, int hi, int *out) {
-    char *end = nullptr;
-    errno = 0;
-    const long v = std::strtol(s, &end, 10);
-    if (errno != 0 || end == s || *end != '\0' || v < lo || v > hi) return false;
-    *out = static_cast<int>(v);
-    return true;
-}
-
 void usage(FILE *f) {
     std::fprintf(
         f,
@@ -229,17 +218,21 @@ int main(int argc, char **argv) {
         } else if (!std::strcmp(a, "--truth-channel") && has) {
             cfg.channels.truth = argv[++i];
         } else if (!std::strcmp(a, "--sched-fifo") && has) {
-            if (!parse_int(argv[++i], 1, 99, &rt.fifo_priority)) {
+            long v = 0;
+            if (!sfdapp::parse_long(argv[++i], 1, 99, &v)) {
                 std::fprintf(stderr,
                              "sfd-node: --sched-fifo: expected a priority 1..99, got '%s'\n",
                              argv[i]);
                 return 2;
             }
+            rt.fifo_priority = static_cast<int>(v);
         } else if (!std::strcmp(a, "--cpu") && has) {
-            if (!parse_int(argv[++i], 0, CPU_SETSIZE - 1, &rt.cpu)) {
+            long v = 0;
+            if (!sfdapp::parse_long(argv[++i], 0, CPU_SETSIZE - 1, &v)) {
                 std::fprintf(stderr, "sfd-node: --cpu: expected a CPU number, got '%s'\n", argv[i]);
                 return 2;
             }
+            rt.cpu = static_cast<int>(v);
         } else if (!std::strcmp(a, "--lock-memory")) {
             rt.lock_memory = true;
         } else {

@@ -405,10 +405,10 @@ void sfd_node_handle(sfd_node_t *node, sfd_node_input_t kind, const void *data, 
                 sfd_truth_t_decode(data, 0, size, &node->wire_truth) == size) {
                 sfd_nav_truth(&node->nav, node->wire_truth.utime, node->wire_truth.position,
                               node->wire_truth.orientation);
-                /* a filter started from a TRUTH older than the last frame reads from there */
-                if (node->nav.ready && node->ring.need_known &&
-                    node->nav.ekf_utime < node->ring.needed_from_us) {
-                    sfd_imu_ring_set_needed(&node->ring, node->nav.ekf_utime);
+                /* the filter may have started from a TRUTH older than the last frame */
+                if (node->ring.need_known) { /* a frame was judged, at prev_frame_utime */
+                    sfd_imu_ring_set_needed(&node->ring,
+                                            imu_needed_from(node, node->prev_frame_utime));
                 }
             }
             break;
