@@ -187,8 +187,7 @@ bool read_euroc_sensor_yaml(const std::string &path, EurocCamera *out, std::stri
                    "camera model (non-positive focal length or size?)";
             return false;
         }
-        sfd_extrinsics_t ext;
-        if (sfd_extrinsics_from_matrix(&ext, out->T_BS) != SFD_OK) {
+        if (sfd_extrinsics_from_matrix(&out->ext, out->T_BS) != SFD_OK) {
             *err = path +
                    ": T_BS is not a rigid transform (rotation orthonormal within 1e-6, last row "
                    "0 0 0 1)";

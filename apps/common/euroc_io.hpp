@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sfd/sfd_camera.h"
+#include "sfd/sfd_rotation.h"
 
 namespace sfdapp {
 
@@ -48,6 +49,7 @@ bool euroc_row_numbers(const std::string &path, const EurocRow &row, std::size_t
 struct EurocCamera {
     sfd_camera_t camera{};
     double T_BS[16] = {};
+    sfd_extrinsics_t ext{};  // T_BS as the core's extrinsics
 };
 
 /// Reads and checks a sensor.yaml; false with "path: reason" in err.

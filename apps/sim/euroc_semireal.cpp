@@ -178,12 +178,7 @@ int write_semireal_log(const SemirealOptions &opt) {
     }
     const sfd_camera_t &cam = calib.camera;
     const double *T_BS = calib.T_BS;
-    sfd_extrinsics_t ext;
-    if (sfd_extrinsics_from_matrix(&ext, T_BS) != SFD_OK) {  // the reader checked it
-        std::fprintf(stderr, "sfd-sim: internal: %s: T_BS passed the reader, not the core\n",
-                     cam_path.c_str());
-        return 1;
-    }
+    const sfd_extrinsics_t &ext = calib.ext;
     // The overlap of IMU and ground truth (same clock): the log covers it only.
     const int64_t t_begin = std::max(imu.front().t_ns, gt.front().pose.t_ns);
     const int64_t t_end = std::min(imu.back().t_ns, gt.back().pose.t_ns);
