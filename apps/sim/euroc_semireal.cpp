@@ -128,6 +128,7 @@ struct Track {
     double drift_px[2] = {0, 0};
     int drift_left = 0;
     int64_t last_step = INT32_MIN;  // frame of the last jump/drift step/mismatch
+    int8_t last_kind = 0;           // TRUTH kind of that step (truth_t KIND_*)
     bool alive = false;
     bool mover = false;
 };
@@ -262,6 +263,7 @@ int write_semireal_log(const SemirealOptions &opt) {
         T.drift_px[0] = T.drift_px[1] = 0.0;
         T.drift_left = 0;
         T.last_step = INT32_MIN;
+        T.last_kind = SFD_TRUTH_T_KIND_CLEAN;
     };
 
     static sfd_feature_frame_t ff;
@@ -354,6 +356,7 @@ int write_semireal_log(const SemirealOptions &opt) {
                     T.off_px[0] += opt.jump_px * std::cos(ang);
                     T.off_px[1] += opt.jump_px * std::sin(ang);
                     T.last_step = f;
+                    T.last_kind = SFD_TRUTH_T_KIND_JUMP;
                     ++n_mistrack;
                 } else if (u_kind < 2.0 / 3.0) {  // drift, from this frame on
                     T.drift_px[0] = opt.drift_px * std::cos(ang);
@@ -374,6 +377,7 @@ int write_semireal_log(const SemirealOptions &opt) {
                         }
                         std::memcpy(T.p_W, p2, sizeof p2);
                         T.last_step = f;
+                        T.last_kind = SFD_TRUTH_T_KIND_MISMATCH;
                         ++n_mismatch_events;
                         break;
                     }
@@ -385,6 +389,7 @@ int write_semireal_log(const SemirealOptions &opt) {
                 T.off_px[1] += T.drift_px[1];
                 T.drift_left--;
                 T.last_step = f;
+                T.last_kind = SFD_TRUTH_T_KIND_DRIFT;
             }
             double u = uv[0] + T.off_px[0], v = uv[1] + T.off_px[1];
             if (!vis || u < 0 || u >= cam.width_px || v < 0 || v >= cam.height_px) {
@@ -406,6 +411,8 @@ int write_semireal_log(const SemirealOptions &opt) {
             const bool spurious = T.mover || (f - T.last_step < opt.truth_window);
             tr.track_id[k] = T.id;
             tr.spurious[k] = spurious ? 1 : 0;
+            tr.kind[k] = T.mover ? SFD_TRUTH_T_KIND_MOVING
+                                 : (spurious ? T.last_kind : SFD_TRUTH_T_KIND_CLEAN);
             n_spurious += spurious;
             n_mover += T.mover;
             ++n_total;

@@ -287,6 +287,8 @@ int generate_flight(const FlightOptions &opt, FlightSink &sink, FlightStats *sta
             tr.track_id[k] = L.track_id;
             const bool spurious = L.mover || (f - L.last_jump_frame < opt.truth_window);
             tr.spurious[k] = spurious ? 1 : 0;
+            tr.kind[k] = L.mover ? SFD_TRUTH_T_KIND_MOVING
+                                 : (spurious ? SFD_TRUTH_T_KIND_JUMP : SFD_TRUTH_T_KIND_CLEAN);
             ++k;
         }
         if (worst) {
@@ -302,6 +304,7 @@ int generate_flight(const FlightOptions &opt, FlightSink &sink, FlightStats *sta
                 ff.u[m] = cam.width_px * sfd_prng_uniform(&rng);
                 ff.v[m] = cam.height_px * sfd_prng_uniform(&rng);
                 tr.spurious[m] = 1;
+                tr.kind[m] = SFD_TRUTH_T_KIND_MISMATCH;
             }
         }
         for (int i = 0; i < k; ++i) n_spurious += tr.spurious[i];

@@ -83,3 +83,34 @@ int sfd_lcm_decode_features(const void *data, int size, sfd_feature_frame_t *msg
     *depth_fixed = fixed;
     return SFD_REJECT_NONE;
 }
+
+int sfd_lcm_decode_truth(const void *data, int size, sfd_truth_t *out, sfd_truth_v1_t *legacy) {
+    if (data == NULL || size < 0 || out == NULL || legacy == NULL) return SFD_REJECT_DECODE;
+    if (sfd_truth_t_decode(data, 0, size, out) != size) {
+        if (sfd_truth_v1_t_decode(data, 0, size, legacy) != size) return SFD_REJECT_DECODE;
+        if (legacy->num_features < 0 || legacy->num_features > SFD_TRUTH_V1_T_CAPACITY) {
+            return SFD_REJECT_COUNT;
+        }
+        out->utime = legacy->utime;
+        memcpy(out->position, legacy->position, sizeof out->position);
+        memcpy(out->orientation, legacy->orientation, sizeof out->orientation);
+        out->num_features = legacy->num_features;
+        for (int i = 0; i < legacy->num_features; ++i) {
+            out->track_id[i] = legacy->track_id[i];
+            out->spurious[i] = legacy->spurious[i];
+            out->kind[i] = (int8_t)(legacy->spurious[i] != 0 ? SFD_TRUTH_T_KIND_UNSPECIFIED
+                                                             : SFD_TRUTH_T_KIND_CLEAN);
+        }
+    }
+    if (out->num_features < 0 || out->num_features > SFD_TRUTH_T_CAPACITY) return SFD_REJECT_COUNT;
+    if (!all_finite(out->position, 3) || !all_finite(out->orientation, 4)) {
+        return SFD_REJECT_NONFINITE;
+    }
+    for (int i = 0; i < out->num_features; ++i) {
+        const int8_t k = out->kind[i];
+        if (k < SFD_TRUTH_T_KIND_CLEAN || k > SFD_TRUTH_T_KIND_UNSPECIFIED)
+            return SFD_REJECT_DECODE;
+        if ((k != SFD_TRUTH_T_KIND_CLEAN) != (out->spurious[i] != 0)) return SFD_REJECT_DECODE;
+    }
+    return SFD_REJECT_NONE;
+}

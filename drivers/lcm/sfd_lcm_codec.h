@@ -18,6 +18,8 @@
 #include "sfd_camera_info_t.h"
 #include "sfd_feature_frame_t.h"
 #include "sfd_imu_t.h"
+#include "sfd_truth_t.h"
+#include "sfd_truth_v1_t.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -73,6 +75,18 @@ int sfd_lcm_decode_camera_info(const void *data, int size, sfd_camera_info_t *ms
  */
 int sfd_lcm_decode_features(const void *data, int size, sfd_feature_frame_t *msg,
                             sfd_frame_t *frame, int32_t *camera_id, int *depth_fixed);
+
+/**
+ * @brief Decodes TRUTH in the current layout (truth_t, with kind[]) or the one logs before kind[]
+ *        carry (truth_v1_t); a v1 message gets kind = KIND_UNSPECIFIED for its spurious features
+ *        and KIND_CLEAN for the others, so readers see one layout.
+ * @param legacy  caller-owned scratch for the v1 wire struct (5 KiB: keep it static).
+ * @return SFD_REJECT_NONE on success (out filled; its entries past num_features are
+ *         unspecified); SFD_REJECT_DECODE (neither layout, or a kind[] outside KIND_CLEAN ..
+ *         KIND_UNSPECIFIED, or kind and spurious disagreeing on whether a feature is spurious);
+ *         SFD_REJECT_COUNT (num_features outside [0, CAPACITY]); SFD_REJECT_NONFINITE (pose).
+ */
+int sfd_lcm_decode_truth(const void *data, int size, sfd_truth_t *out, sfd_truth_v1_t *legacy);
 
 #ifdef __cplusplus
 }

@@ -402,7 +402,8 @@ void sfd_node_handle(sfd_node_t *node, sfd_node_input_t kind, const void *data, 
             break;
         case SFD_NODE_TRUTH:
             if (node->cfg.nav.init_from_truth && data != NULL && size > 0 &&
-                sfd_truth_t_decode(data, 0, size, &node->wire_truth) == size) {
+                sfd_lcm_decode_truth(data, size, &node->wire_truth, &node->wire_truth_v1) ==
+                    SFD_REJECT_NONE) {
                 sfd_nav_truth(&node->nav, node->wire_truth.utime, node->wire_truth.position,
                               node->wire_truth.orientation);
                 /* the filter may have started from a TRUTH older than the last frame */

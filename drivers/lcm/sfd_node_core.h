@@ -101,6 +101,7 @@ typedef struct {
     sfd_timing_t wire_timing;
     sfd_nav_state_t wire_state;
     sfd_truth_t wire_truth;
+    sfd_truth_v1_t wire_truth_v1; /* scratch: TRUTH of logs before kind[] */
     int8_t final_status[SFD_MAX_FEATURES];
     uint8_t skip[SFD_MAX_FEATURES];
     sfd_imu_sample_t imu_scratch[SFD_MAX_IMU_SAMPLES];

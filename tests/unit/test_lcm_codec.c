@@ -18,12 +18,14 @@
 #include "sfd_node_core.h"
 #include "sfd_timing_t.h"
 #include "sfd_truth_t.h"
+#include "sfd_truth_v1_t.h"
 
 enum { BUF = 64 * 1024 };
 static uint8_t g_buf[BUF];
 static sfd_feature_frame_t g_ff, g_ff2;
 static sfd_feature_verdict_t g_fv, g_fv2;
 static sfd_truth_t g_tr, g_tr2;
+static sfd_truth_v1_t g_tr1;
 static sfd_frame_t g_frame;
 
 #define ROUND_TRIP(type, a, b)                                           \
@@ -90,6 +92,7 @@ static void lcm_every_type_round_trips_at_max_size(void **state) {
     for (int i = 0; i < 512; ++i) {
         g_tr.track_id[i] = i;
         g_tr.spurious[i] = (int8_t)(i % 2);
+        g_tr.kind[i] = (int8_t)(i % 2 ? 1 + (i / 2) % 5 : 0);
     }
     ROUND_TRIP(sfd_truth_t, &g_tr, &g_tr2);
     /* the driver's reason numbers are the wire's */
@@ -98,6 +101,87 @@ static void lcm_every_type_round_trips_at_max_size(void **state) {
     assert_int_equal(SFD_REJECT_IMU_GAP, SFD_TIMING_T_REJECT_IMU_GAP);
     assert_string_equal(sfd_reject_reason_str(SFD_REJECT_COUNT), "count");
     assert_string_equal(sfd_reject_reason_str(99), "unknown");
+}
+
+/* GIVEN TRUTH in the current layout (kind[]) and in the layout of logs written before it
+ * (truth_v1_t) WHEN the driver decodes them THEN both give the same poses, ids and labels, the v1
+ * one with kind UNSPECIFIED exactly where spurious; a kind out of range, a kind disagreeing with
+ * spurious, a bad count, a non-finite pose and a truncation are rejected. */
+static void lcm_truth_decodes_current_and_legacy_layouts(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-006");
+    memset(&g_tr, 0, sizeof g_tr);
+    g_tr.utime = 42;
+    g_tr.position[0] = 1.5;
+    g_tr.orientation[0] = 1.0;
+    g_tr.num_features = 4;
+    const int8_t sp[4] = {0, 1, 1, 0},
+                 kind[4] = {0, SFD_TRUTH_T_KIND_DRIFT, SFD_TRUTH_T_KIND_MOVING, 0};
+    for (int i = 0; i < 4; ++i) {
+        g_tr.track_id[i] = 10 + i;
+        g_tr.spurious[i] = sp[i];
+        g_tr.kind[i] = kind[i];
+    }
+    int n = sfd_truth_t_encode(g_buf, 0, BUF, &g_tr);
+    assert_true(n > 0);
+    assert_int_equal(sfd_lcm_decode_truth(g_buf, n, &g_tr2, &g_tr1), SFD_REJECT_NONE);
+    assert_int_equal(g_tr2.utime, 42);
+    assert_int_equal(g_tr2.num_features, 4);
+    for (int i = 0; i < 4; ++i) {
+        assert_int_equal(g_tr2.track_id[i], 10 + i);
+        assert_int_equal(g_tr2.kind[i], kind[i]);
+    }
+    assert_int_equal(sfd_lcm_decode_truth(g_buf, n - 1, &g_tr2, &g_tr1), SFD_REJECT_DECODE);
+
+    /* the same frame as a log before kind[] wrote it */
+    memset(&g_tr1, 0, sizeof g_tr1);
+    g_tr1.utime = 42;
+    g_tr1.position[0] = 1.5;
+    g_tr1.orientation[0] = 1.0;
+    g_tr1.num_features = 4;
+    for (int i = 0; i < 4; ++i) {
+        g_tr1.track_id[i] = 10 + i;
+        g_tr1.spurious[i] = sp[i];
+    }
+    n = sfd_truth_v1_t_encode(g_buf, 0, BUF, &g_tr1);
+    assert_true(n > 0);
+    memset(&g_tr2, 0x5a, sizeof g_tr2);
+    assert_int_equal(sfd_lcm_decode_truth(g_buf, n, &g_tr2, &g_tr1), SFD_REJECT_NONE);
+    assert_int_equal(g_tr2.utime, 42);
+    assert_true(g_tr2.position[0] == 1.5);
+    for (int i = 0; i < 4; ++i) {
+        assert_int_equal(g_tr2.track_id[i], 10 + i);
+        assert_int_equal(g_tr2.spurious[i], sp[i]);
+        assert_int_equal(g_tr2.kind[i],
+                         sp[i] ? SFD_TRUTH_T_KIND_UNSPECIFIED : SFD_TRUTH_T_KIND_CLEAN);
+    }
+
+    /* invalid content */
+    g_tr.kind[1] = 6; /* out of range */
+    n = sfd_truth_t_encode(g_buf, 0, BUF, &g_tr);
+    assert_int_equal(sfd_lcm_decode_truth(g_buf, n, &g_tr2, &g_tr1), SFD_REJECT_DECODE);
+    g_tr.kind[1] = 0; /* clean kind on a spurious feature */
+    n = sfd_truth_t_encode(g_buf, 0, BUF, &g_tr);
+    assert_int_equal(sfd_lcm_decode_truth(g_buf, n, &g_tr2, &g_tr1), SFD_REJECT_DECODE);
+    g_tr.kind[1] = SFD_TRUTH_T_KIND_DRIFT;
+    g_tr.kind[0] = SFD_TRUTH_T_KIND_JUMP; /* a kind on a clean feature */
+    n = sfd_truth_t_encode(g_buf, 0, BUF, &g_tr);
+    assert_int_equal(sfd_lcm_decode_truth(g_buf, n, &g_tr2, &g_tr1), SFD_REJECT_DECODE);
+    g_tr.kind[0] = 0;
+    g_tr.num_features = 513;
+    n = sfd_truth_t_encode(g_buf, 0, BUF, &g_tr);
+    assert_true(n > 0); /* fixed-size arrays: the count is just a field on the wire */
+    assert_int_equal(sfd_lcm_decode_truth(g_buf, n, &g_tr2, &g_tr1), SFD_REJECT_COUNT);
+    g_tr.num_features = 4;
+    g_tr.position[2] = NAN;
+    n = sfd_truth_t_encode(g_buf, 0, BUF, &g_tr);
+    assert_int_equal(sfd_lcm_decode_truth(g_buf, n, &g_tr2, &g_tr1), SFD_REJECT_NONFINITE);
+    g_tr.position[2] = 0.0;
+    g_tr1.num_features = -1;
+    n = sfd_truth_v1_t_encode(g_buf, 0, BUF, &g_tr1);
+    assert_true(n > 0);
+    assert_int_equal(sfd_lcm_decode_truth(g_buf, n, &g_tr2, &g_tr1), SFD_REJECT_COUNT);
+    assert_int_equal(sfd_lcm_decode_truth(NULL, 0, &g_tr2, &g_tr1), SFD_REJECT_DECODE);
 }
 
 static int encode_ff(void) {
@@ -445,6 +529,7 @@ int main(void) {
         cmocka_unit_test(lcm_every_type_round_trips_at_max_size),
         cmocka_unit_test(lcm_features_decode_validates_before_core),
         cmocka_unit_test(lcm_imu_and_camera_info_validated),
+        cmocka_unit_test(lcm_truth_decodes_current_and_legacy_layouts),
         cmocka_unit_test(lcm_node_follows_first_camera_even_with_negative_id),
         cmocka_unit_test(lcm_node_reports_imu_overflow_only_for_needed_samples),
         cmocka_unit_test(lcm_node_waiting_filter_keeps_its_rest_window),
