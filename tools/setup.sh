@@ -18,6 +18,7 @@ APT_PKGS=(
   liblcm-dev liblcm-bin libglib2.0-dev
   libopencv-dev
   libcmocka-dev
+  nlohmann-json3-dev
   gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib binutils-arm-none-eabi
   g++-aarch64-linux-gnu qemu-user
   clang-format cppcheck clang-tidy

@@ -13,20 +13,31 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <map>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "sfd_app_config.hpp"
+#include "sfd_eval.hpp"
+#include "sfd_lcm_codec.h"
 #include "sfd_node_core.h"
-#include "sfd_truth_t.h"
 
 namespace {
 
-struct FrameRecord {
+using json = nlohmann::ordered_json;
+
+struct VerdictRecord {
     std::vector<int64_t> ids;
     std::vector<int8_t> status;
-    double position[3] = {0, 0, 0};  // TRUTH: true IMU position; states: the EKF's
+};
+
+struct TruthRecord {
+    std::vector<int64_t> ids;
+    std::vector<int8_t> kinds;  // KIND_* per feature (KIND_CLEAN when not spurious)
+    sfdeval::Pose pose;
 };
 
 struct App {
@@ -35,8 +46,8 @@ struct App {
     std::string verdict_channel = "SFD_VERDICT";
     std::string timing_channel = "SFD_TIMING";
     std::string state_channel = "SFD_STATE";
-    std::map<int64_t, FrameRecord> verdicts;
-    std::map<int64_t, FrameRecord> states;  // SFD_STATE by frame time
+    std::map<int64_t, VerdictRecord> verdicts;  // SFD_VERDICT by frame time
+    std::map<int64_t, sfdeval::Pose> states;    // SFD_STATE by frame time
     sfd_nav_state_t decoded_state;
     bool write_failed = false;
     sfd_feature_verdict_t decoded;
@@ -57,23 +68,114 @@ void write_event(lcm_eventlog_t *log, const std::string &channel, int64_t ts, co
     if (lcm_eventlog_write_event(log, &ev) != 0) g_app.write_failed = true;
 }
 
+// Records a published (or, with --score-only, logged) SFD_STATE or SFD_VERDICT for scoring.
+void record_output(App *app, sfd_node_output_t kind, const void *data, int32_t size) {
+    if (kind == SFD_NODE_OUT_STATE &&
+        sfd_nav_state_t_decode(data, 0, size, &app->decoded_state) == size) {
+        const sfd_nav_state_t &d = app->decoded_state;
+        sfdeval::Pose &p = app->states[d.utime];
+        p.t_us = d.utime;
+        for (int k = 0; k < 3; ++k) {
+            p.p[k] = d.position[k];
+            p.var[k] = d.position_var[k];
+        }
+        for (int k = 0; k < 4; ++k) p.q[k] = d.orientation[k];
+        p.has_var = true;
+    }
+    if (kind == SFD_NODE_OUT_VERDICT &&
+        sfd_feature_verdict_t_decode(data, 0, size, &app->decoded) == size &&
+        app->decoded.num_features >= 0) {
+        VerdictRecord &r = app->verdicts[app->decoded.utime];
+        r.ids.assign(app->decoded.track_id, app->decoded.track_id + app->decoded.num_features);
+        r.status.assign(app->decoded.status, app->decoded.status + app->decoded.num_features);
+    }
+}
+
 void on_publish(void *ctx, sfd_node_output_t kind, const void *data, int32_t size, int64_t) {
     App *app = static_cast<App *>(ctx);
     const std::string &ch = kind == SFD_NODE_OUT_VERDICT ? app->verdict_channel
                             : kind == SFD_NODE_OUT_STATE ? app->state_channel
                                                          : app->timing_channel;
     if (app->out != nullptr) write_event(app->out, ch, app->current_timestamp, data, size);
-    if (kind == SFD_NODE_OUT_STATE &&
-        sfd_nav_state_t_decode(data, 0, size, &app->decoded_state) == size) {
-        FrameRecord &r = app->states[app->decoded_state.utime];
-        for (int k = 0; k < 3; ++k) r.position[k] = app->decoded_state.position[k];
+    record_output(app, kind, data, size);
+}
+
+// A score for the JSON summary: null where it is not defined (sfdeval::kUndefined).
+json number(double x) {
+    return std::isfinite(x) ? json(x) : json(nullptr);
+}
+
+json spread_json(const sfdeval::Spread &s) {
+    return json{{"median", number(s.median)},
+                {"p99", number(s.p99)},
+                {"p999", number(s.p999)},
+                {"max", number(s.max)},
+                {"mean", number(s.mean)}};
+}
+
+json detection_json(const sfdeval::DetectionCounts &c) {
+    const sfdeval::DetectionScores s = sfdeval::score(c);
+    json j{{"labelled", c.labelled()},
+           {"spurious", c.spurious()},
+           {"clean", c.clean()},
+           {"tp", c.tp},
+           {"fp", c.fp},
+           {"tn", c.tn},
+           {"fn", c.fn},
+           {"untested_spurious", c.untested_spurious},
+           {"untested_clean", c.untested_clean},
+           {"precision", number(s.precision)},
+           {"recall", number(s.recall)},
+           {"f1", number(s.f1)},
+           {"false_alarm_rate", number(s.false_alarm_rate)},
+           {"coverage", number(s.coverage)},
+           {"recall_tested", number(s.recall_tested)},
+           {"false_alarm_rate_tested", number(s.false_alarm_rate_tested)}};
+    json kinds = json::object();
+    for (int k = sfdeval::kJump; k < sfdeval::kNumKinds; ++k) {
+        kinds[sfdeval::kind_name(k)] = json{{"spurious", c.kind_spurious[k]},
+                                            {"detected", c.kind_detected[k]},
+                                            {"untested", c.kind_untested[k]},
+                                            {"recall", number(s.kind_recall[k])}};
     }
-    if (kind == SFD_NODE_OUT_VERDICT &&
-        sfd_feature_verdict_t_decode(data, 0, size, &app->decoded) == size) {
-        FrameRecord &r = app->verdicts[app->decoded.utime];
-        r.ids.assign(app->decoded.track_id, app->decoded.track_id + app->decoded.num_features);
-        r.status.assign(app->decoded.status, app->decoded.status + app->decoded.num_features);
+    j["by_kind"] = kinds;
+    return j;
+}
+
+json segments_json(const sfdeval::SegmentErrors &s, bool with_percent) {
+    json j{{"segments", s.segments}, {"mean_m", number(s.mean_m)}, {"rmse_m", number(s.rmse_m)}};
+    if (with_percent) j["mean_percent"] = number(s.mean_percent);
+    return j;
+}
+
+json trajectory_json(const sfdeval::TrajectoryErrors &e) {
+    return json{{"frames", e.frames},
+                {"distance_m", number(e.distance_m)},
+                {"rmse_raw_m", number(e.rmse_raw_m)},
+                {"ate_m", number(e.ate_m)},
+                {"align_yaw_rad", number(e.alignment.yaw_rad)},
+                {"final_error_m", number(e.final_error_m)},
+                {"drift_percent", number(e.drift_percent)},
+                {"rpe_1s", segments_json(e.rpe_1s, false)},
+                {"rpe_10m", segments_json(e.rpe_10m, true)},
+                {"nees_position", json{{"frames", e.nees_frames},
+                                       {"mean", number(e.nees_mean)},
+                                       {"in_band_95", number(e.nees_in_band_95)}}}};
+}
+
+// Writes `text` to `path` (exit code 0, or 1 with a message naming the path on any failure).
+int write_text(const std::string &path, const std::string &text, const char *what) {
+    std::FILE *f = std::fopen(path.c_str(), "w");
+    if (f == nullptr) {
+        std::fprintf(stderr, "sfd-replay: %s %s: cannot open for writing\n", what, path.c_str());
+        return 1;
     }
+    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+    if (std::fclose(f) != 0 || !ok) {
+        std::fprintf(stderr, "sfd-replay: %s %s: write failed\n", what, path.c_str());
+        return 1;
+    }
+    return 0;
 }
 
 void usage(FILE *f) {
@@ -82,14 +184,19 @@ void usage(FILE *f) {
         "usage: sfd-replay IN.lcmlog [--config F] [-o OUT.lcmlog] [--summary S.json] [--method M]\n"
         "                  [--alpha A] [--window L] [--group n] [--pixel-sigma PX]\n"
         "                  [--depth-default M] [--no-isolation]\n"
+        "       sfd-replay IN.lcmlog --score-only [--config F] [--summary S.json]\n"
         "  Plays IN through the node's code path as fast as possible.\n"
+        "  --score-only  run no node: score the SFD_VERDICT and SFD_STATE already in IN\n"
+        "              (a recorded sfd-node run, or a previous -o) against its TRUTH\n"
         "  -o          write the input events and the published SFD_VERDICT/SFD_STATE/\n"
         "              SFD_TIMING\n"
         "  --summary   JSON summary (scored against TRUTH when the log has it); wall-\n"
         "              clock timing goes to S.timing.json\n"
         "  --method    none | parity | oprf | ransac1 | ransacf | both (default: the\n"
         "              config's, parity); oprf, ransac1, ransacf, both need filter.enabled\n"
-        "  TRUTH in IN scores the verdicts and the SFD_STATE positions (RMSE); with\n"
+        "  TRUTH in IN scores the verdicts (every labelled feature counts: an UNTESTED\n"
+        "  spurious one is a miss) and the SFD_STATE poses (ATE after position+yaw\n"
+        "  alignment, raw RMSE, drift, RPE, NEES; docs/evaluation.md). With\n"
         "  filter.init_from_truth: 1 the filter starts from TRUTH instead of at rest.\n"
         "Exit: 0 ok, 2 bad usage or unreadable input, 1 internal failure.\n");
 }
@@ -104,10 +211,9 @@ double parse_double(const char *flag, const char *s, double lo, double hi, bool 
     return v;
 }
 
-}  // namespace
-
-int main(int argc, char **argv) {
+int run(int argc, char **argv) {
     const char *in_path = nullptr, *out_path = nullptr, *summary_path = nullptr;
+    bool score_only = false;
     sfdapp::AppConfig app_cfg;
     std::string err;
     for (int i = 1; i + 1 < argc; ++i) {  // the config file first, flags override it
@@ -146,6 +252,8 @@ int main(int argc, char **argv) {
             cfg.params.pixel_sigma_px = parse_double(a, argv[++i], 1e-6, 1e3, &ok);
         } else if (!std::strcmp(a, "--depth-default") && has) {
             cfg.params.default_depth_m = parse_double(a, argv[++i], 1e-3, 1e6, &ok);
+        } else if (!std::strcmp(a, "--score-only")) {
+            score_only = true;
         } else if (!std::strcmp(a, "--no-isolation")) {
             cfg.params.parity_isolation = 0;
         } else if (a[0] != '-' && in_path == nullptr) {
@@ -170,6 +278,10 @@ int main(int argc, char **argv) {
         usage(stderr);
         return 2;
     }
+    if (score_only && out_path != nullptr) {
+        std::fprintf(stderr, "sfd-replay: --score-only writes no OUT (-o)\n");
+        return 2;
+    }
     lcm_eventlog_t *in = lcm_eventlog_create(in_path, "r");
     if (in == nullptr) {
         std::fprintf(stderr, "sfd-replay: %s: cannot open for reading\n", in_path);
@@ -191,8 +303,10 @@ int main(int argc, char **argv) {
     const long file_size = std::ftell(in->f);
     std::fseek(in->f, 0, SEEK_SET);
     const bool progress = isatty(STDERR_FILENO) != 0;
-    std::map<int64_t, FrameRecord> truth;
+    std::map<int64_t, TruthRecord> truth;  // TRUTH by frame time
     static sfd_truth_t tr;
+    static sfd_truth_v1_t tr_v1;  // scratch for logs written before TRUTH had kind[]
+    long truth_bad = 0;
     std::vector<double> frame_us;
     int64_t first_ts = 0, last_ts = 0, events = 0, foreign = 0;
     int last_pct = -1;
@@ -205,7 +319,26 @@ int main(int argc, char **argv) {
         g_app.current_timestamp = ev->timestamp;
         const std::string ch(ev->channel, size_t(ev->channellen));
         if (g_app.out != nullptr) write_event(g_app.out, ch, ev->timestamp, ev->data, ev->datalen);
-        if (ch == app_cfg.channels.imu) {
+        if (ch == "TRUTH") {
+            if (!score_only) sfd_node_handle(&g_node, SFD_NODE_TRUTH, ev->data, ev->datalen);
+            if (sfd_lcm_decode_truth(ev->data, ev->datalen, &tr, &tr_v1) == SFD_REJECT_NONE) {
+                TruthRecord &r = truth[tr.utime];
+                r.ids.assign(tr.track_id, tr.track_id + tr.num_features);
+                r.kinds.assign(tr.kind, tr.kind + tr.num_features);
+                r.pose.t_us = tr.utime;
+                for (int k = 0; k < 3; ++k) r.pose.p[k] = tr.position[k];
+                for (int k = 0; k < 4; ++k) r.pose.q[k] = tr.orientation[k];
+            } else {
+                ++truth_bad;  // not scored (counted in the summary)
+            }
+        } else if (score_only) {  // the recorded outputs; nothing goes to a node
+            const bool verdict = ch == g_app.verdict_channel, state = ch == g_app.state_channel;
+            if (verdict || state) {
+                record_output(&g_app, verdict ? SFD_NODE_OUT_VERDICT : SFD_NODE_OUT_STATE, ev->data,
+                              ev->datalen);
+            }
+            foreign += !(verdict || state);
+        } else if (ch == app_cfg.channels.imu) {
             sfd_node_handle(&g_node, SFD_NODE_IMU, ev->data, ev->datalen);
         } else if (ch == app_cfg.channels.camera_info) {
             sfd_node_handle(&g_node, SFD_NODE_CAMERA_INFO, ev->data, ev->datalen);
@@ -214,15 +347,6 @@ int main(int argc, char **argv) {
             sfd_node_handle(&g_node, SFD_NODE_FEATURES, ev->data, ev->datalen);
             const auto t1 = std::chrono::steady_clock::now();
             frame_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
-        } else if (ch == "TRUTH") {
-            sfd_node_handle(&g_node, SFD_NODE_TRUTH, ev->data, ev->datalen);
-            if (sfd_truth_t_decode(ev->data, 0, ev->datalen, &tr) == ev->datalen &&
-                tr.num_features >= 0 && tr.num_features <= SFD_TRUTH_T_CAPACITY) {
-                FrameRecord &r = truth[tr.utime];
-                r.ids.assign(tr.track_id, tr.track_id + tr.num_features);
-                r.status.assign(tr.spurious, tr.spurious + tr.num_features);
-                for (int k = 0; k < 3; ++k) r.position[k] = tr.position[k];
-            }
         } else {
             ++foreign;  // other channels (e.g. a previous run's outputs) are copied, not read
         }
@@ -235,7 +359,7 @@ int main(int argc, char **argv) {
             }
         }
     }
-    sfd_node_flush(&g_node);
+    if (!score_only) sfd_node_flush(&g_node);
     const double wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     if (progress) std::fprintf(stderr, "\rsfd-replay: 100%%\n");
@@ -254,140 +378,135 @@ int main(int argc, char **argv) {
             judged_spurious += st == SFD_FEATURE_VERDICT_T_SPURIOUS;
         }
     }
-    // Score verdicts against TRUTH (tested features only; untested counted apart). Only features
-    // TRUTH labels count; a frame is scored when TRUTH labels at least one of its features. TRUTH
-    // of real data (sfd-euroc) carries poses and no labels: nothing is scored, and the summary
-    // says so instead of printing zero scores.
-    long tp = 0, fp = 0, tn = 0, fn = 0, untested_spurious = 0, untested_consistent = 0, scored = 0;
-    long labelled = 0;
-    for (const auto &kv : g_app.verdicts) {
-        const auto it = truth.find(kv.first);
-        if (it == truth.end()) continue;
-        const long labelled_before = labelled;
-        std::map<int64_t, int8_t> lab;
-        for (size_t i = 0; i < it->second.ids.size(); ++i)
-            lab[it->second.ids[i]] = it->second.status[i];
-        for (size_t i = 0; i < kv.second.ids.size(); ++i) {
-            const auto l = lab.find(kv.second.ids[i]);
-            if (l == lab.end()) continue;
-            ++labelled;
-            const bool sp = l->second != 0;
-            const int8_t st = kv.second.status[i];
-            if (st == SFD_FEATURE_VERDICT_T_UNTESTED) {
-                (sp ? untested_spurious : untested_consistent)++;
-            } else if (st == SFD_FEATURE_VERDICT_T_SPURIOUS) {
-                (sp ? tp : fp)++;
-            } else {
-                (sp ? fn : tn)++;
-            }
-        }
-        scored += labelled > labelled_before;
+    // Detection (sfd_eval.hpp): every feature TRUTH labels counts, whether or not its frame got a
+    // verdict; a spurious one left UNTESTED or without a verdict is a miss. TRUTH of real data
+    // (sfd-euroc) carries poses and no features: then nothing is scored (null, not zeros).
+    sfdeval::DetectionCounts counts;
+    static const std::vector<int64_t> no_ids;
+    static const std::vector<int8_t> no_status;
+    for (const auto &kv : truth) {
+        const auto v = g_app.verdicts.find(kv.first);
+        const bool judged = v != g_app.verdicts.end();
+        counts.add_frame(kv.second.ids, kv.second.kinds, judged ? v->second.ids : no_ids,
+                         judged ? v->second.status : no_status);
     }
-    // Position RMSE of SFD_STATE against TRUTH at the same frame times (no alignment: the filter
-    // starts from TRUTH (filter.init_from_truth) or at rest at the origin of its own frame, in
-    // which case the RMSE measures the drift from that start).
-    double se = 0.0;
-    long state_frames = 0;
+    const sfdeval::DetectionScores sc = sfdeval::score(counts);
+    // Trajectory: SFD_STATE against TRUTH at the same frame times.
+    std::vector<sfdeval::Pose> est, gt;
     for (const auto &kv : g_app.states) {
         const auto it = truth.find(kv.first);
         if (it == truth.end()) continue;
-        for (int k = 0; k < 3; ++k) {
-            const double d = kv.second.position[k] - it->second.position[k];
-            se += d * d;
-        }
-        ++state_frames;
+        est.push_back(kv.second);
+        gt.push_back(it->second.pose);
     }
-    const double rmse = state_frames > 0 ? std::sqrt(se / double(state_frames)) : 0.0;
-    const double precision = tp + fp ? double(tp) / double(tp + fp) : 0.0;
-    const double recall = tp + fn ? double(tp) / double(tp + fn) : 0.0;
-    const double f1 = precision + recall > 0 ? 2 * precision * recall / (precision + recall) : 0.0;
-    const double far = fp + tn ? double(fp) / double(fp + tn) : 0.0;
+    const sfdeval::TrajectoryErrors te = sfdeval::evaluate_trajectory(est, gt);
+    const sfdeval::Spread fs = sfdeval::spread_of(frame_us);
+    const double log_s = double(last_ts - first_ts) * 1e-6;
+    const double speed = wall_s > 0 ? log_s / wall_s : 0.0;
+    const char *filter_start = score_only                ? "unknown"
+                               : !cfg.nav.enabled        ? "none"
+                               : cfg.nav.init_from_truth ? "truth"
+                                                         : "rest";
     const sfd_node_counters_t &c = g_node.counters;
-    std::printf(
-        "sfd-replay %s: method %s, %lld events, %lld frames processed (%lld untested), "
-        "%ld scored against TRUTH\n",
-        in_path, method_name.c_str(), static_cast<long long>(events),
-        static_cast<long long>(c.frames_processed), static_cast<long long>(c.frames_untested),
-        scored);
+
+    if (score_only) {
+        std::printf("sfd-replay %s: scoring the recorded %s and %s, %lld events\n", in_path,
+                    g_app.verdict_channel.c_str(), g_app.state_channel.c_str(),
+                    static_cast<long long>(events));
+    } else {
+        std::printf(
+            "sfd-replay %s: method %s, filter start %s, %lld events, %lld frames processed "
+            "(%lld untested)\n",
+            in_path, method_name.c_str(), filter_start, static_cast<long long>(events),
+            static_cast<long long>(c.frames_processed), static_cast<long long>(c.frames_untested));
+    }
     std::printf("  judged: %ld features tested, %ld spurious (%.2f%%)\n", judged_tested,
                 judged_spurious,
                 judged_tested ? 100.0 * double(judged_spurious) / double(judged_tested) : 0.0);
-    if (scored == 0 && !truth.empty()) {
+    if (truth_bad > 0) std::printf("  %ld TRUTH messages not decodable: not scored\n", truth_bad);
+    if (counts.labelled() == 0 && !truth.empty()) {
+        std::printf("  TRUTH labels no feature: verdicts not scored\n");
+    }
+    if (counts.labelled() > 0) {
         std::printf(
-            "  TRUTH has no spurious labels for the judged features: verdicts not scored\n");
+            "  detection (strict: untested spurious = miss): precision %.4f  recall %.4f  "
+            "F1 %.4f  false-alarm rate %.5f  coverage %.4f\n"
+            "    %ld labelled: TP %ld FP %ld TN %ld FN %ld; untested %ld spurious, %ld clean; "
+            "tested only: recall %.4f, false-alarm rate %.5f\n",
+            sc.precision, sc.recall, sc.f1, sc.false_alarm_rate, sc.coverage, counts.labelled(),
+            counts.tp, counts.fp, counts.tn, counts.fn, counts.untested_spurious,
+            counts.untested_clean, sc.recall_tested, sc.false_alarm_rate_tested);
+        std::printf("    recall by kind:");
+        for (int k = sfdeval::kJump; k < sfdeval::kNumKinds; ++k) {
+            if (counts.kind_spurious[k] == 0) continue;
+            std::printf(" %s %.3f (%ld/%ld, %ld untested)", sfdeval::kind_name(k),
+                        sc.kind_recall[k], counts.kind_detected[k], counts.kind_spurious[k],
+                        counts.kind_untested[k]);
+        }
+        std::printf("\n");
     }
-    if (scored > 0) {
+    if (te.frames > 0) {
         std::printf(
-            "  precision %.4f  recall %.4f  F1 %.4f  false-alarm rate %.5f  "
-            "(TP %ld FP %ld TN %ld FN %ld; untested: %ld spurious, %ld consistent)\n",
-            precision, recall, f1, far, tp, fp, tn, fn, untested_spurious, untested_consistent);
+            "  trajectory over %ld frames, %.1f m: ATE %.4f m (position+yaw aligned), raw RMSE "
+            "%.4f m, final drift %.4f m (%.2f%%), RPE 1 s %.4f m, 10 m %.4f m (%ld segments)\n",
+            te.frames, te.distance_m, te.ate_m, te.rmse_raw_m, te.final_error_m, te.drift_percent,
+            te.rpe_1s.rmse_m, te.rpe_10m.rmse_m, te.rpe_10m.segments);
+        if (te.nees_frames > 0) {
+            std::printf(
+                "  position NEES (diagonal variances): mean %.2f (3 if consistent), %.1f%% of "
+                "frames inside the 95%% band\n",
+                te.nees_mean, 100.0 * te.nees_in_band_95);
+        }
     }
-    if (state_frames > 0) {
-        std::printf("  position RMSE %.4f m over %ld frames with SFD_STATE and TRUTH\n", rmse,
-                    state_frames);
+    if (!score_only) {
+        std::printf(
+            "  time per frame: median %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us; %.1fx real "
+            "time\n",
+            fs.median, fs.p99, fs.p999, fs.max, speed);
     }
-    std::sort(frame_us.begin(), frame_us.end());
-    const double med = frame_us.empty() ? 0 : frame_us[frame_us.size() / 2];
-    const double p99 =
-        frame_us.empty()
-            ? 0
-            : frame_us[std::min(frame_us.size() - 1, size_t(0.99 * double(frame_us.size())))];
-    const double mx = frame_us.empty() ? 0 : frame_us.back();
-    const double log_s = double(last_ts - first_ts) * 1e-6;
-    std::printf("  time per frame: median %.1f us, p99 %.1f us, max %.1f us; %.1fx real time\n",
-                med, p99, mx, wall_s > 0 ? log_s / wall_s : 0.0);
     if (summary_path != nullptr) {
-        FILE *f = std::fopen(summary_path, "w");
-        if (f == nullptr) {
-            std::fprintf(stderr, "sfd-replay: --summary %s: cannot write\n", summary_path);
-            return 2;
-        }
-        std::fprintf(f, "{\n  \"input\": \"%s\",\n  \"events\": %lld,\n", in_path,
-                     static_cast<long long>(events));
-        std::fprintf(f, "  \"frames\": {\"in\": %lld, \"processed\": %lld, \"untested\": %lld},\n",
-                     static_cast<long long>(c.frames_in),
-                     static_cast<long long>(c.frames_processed),
-                     static_cast<long long>(c.frames_untested));
-        std::fprintf(f, "  \"rejected\": {");
+        json rejected = json::object();
         for (int k = 0; k < SFD_REJECT_NUM_REASONS; ++k) {
-            std::fprintf(f, "%s\"%s\": %lld", k ? ", " : "", sfd_reject_reason_str(k),
-                         static_cast<long long>(c.rejected[k]));
+            rejected[sfd_reject_reason_str(k)] = static_cast<long long>(c.rejected[k]);
         }
-        std::fprintf(f,
-                     "},\n  \"methods\": {\n    \"%s\": {\"judged_tested\": %ld, "
-                     "\"judged_spurious\": %ld, \"labelled_features\": %ld, "
-                     "\"frames_scored\": %ld, \"tp\": %ld, "
-                     "\"fp\": %ld, \"tn\": %ld, \"fn\": %ld, \"untested_spurious\": %ld, "
-                     "\"untested_consistent\": %ld",
-                     method_name.c_str(), judged_tested, judged_spurious, labelled, scored, tp, fp,
-                     tn, fn, untested_spurious, untested_consistent);
-        if (labelled > 0) {
-            std::fprintf(f,
-                         ", \"precision\": %.6f, \"recall\": %.6f, \"f1\": %.6f, "
-                         "\"false_alarm_rate\": %.6f",
-                         precision, recall, f1, far);
-        } else {  // no labels: no scores (null, not 0)
-            std::fprintf(f,
-                         ", \"precision\": null, \"recall\": null, \"f1\": null, "
-                         "\"false_alarm_rate\": null");
-        }
-        if (state_frames > 0) {
-            std::fprintf(f, ", \"state_frames\": %ld, \"position_rmse_m\": %.6f", state_frames,
-                         rmse);
-        }
-        std::fprintf(f, "}\n  }\n}\n");
-        std::fclose(f);
+        json j;
+        j["input"] = in_path;
+        j["method"] = score_only ? std::string("recorded") : method_name;
+        j["events"] = static_cast<long long>(events);
+        j["filter_start"] = filter_start;
+        j["frames"] = json{{"in", static_cast<long long>(c.frames_in)},
+                           {"processed", static_cast<long long>(c.frames_processed)},
+                           {"untested", static_cast<long long>(c.frames_untested)}};
+        j["rejected"] = rejected;
+        j["judged"] = json{{"tested", judged_tested}, {"spurious", judged_spurious}};
+        j["truth"] =
+            json{{"frames", static_cast<long long>(truth.size())}, {"undecodable", truth_bad}};
+        j["detection"] = counts.labelled() > 0 ? detection_json(counts) : json(nullptr);
+        j["trajectory"] = te.frames > 0 ? trajectory_json(te) : json(nullptr);
+        if (const int rc = write_text(summary_path,
+                                      j.dump(2, ' ', false, json::error_handler_t::replace) + "\n",
+                                      "--summary"))
+            return rc;
+        json t{{"frames", static_cast<long long>(frame_us.size())},
+               {"frame_us", spread_json(fs)},
+               {"wall_s", wall_s},
+               {"log_s", log_s},
+               {"speed_vs_real_time", speed}};
         const std::string tpath = std::string(summary_path) + ".timing.json";
-        FILE *t = std::fopen(tpath.c_str(), "w");
-        if (t != nullptr) {
-            std::fprintf(t,
-                         "{\"frames\": %zu, \"frame_us\": {\"median\": %.3f, \"p99\": %.3f, "
-                         "\"max\": %.3f}, \"wall_s\": %.6f, \"log_s\": %.6f, "
-                         "\"speed_vs_real_time\": %.2f}\n",
-                         frame_us.size(), med, p99, mx, wall_s, log_s,
-                         wall_s > 0 ? log_s / wall_s : 0.0);
-            std::fclose(t);
-        }
+        if (const int rc = write_text(tpath, t.dump(2) + "\n", "--summary")) return rc;
     }
     return 0;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    try {
+        return run(argc, argv);
+    } catch (const std::exception &e) {  // std::bad_alloc from the records of a huge log
+        std::fprintf(stderr, "sfd-replay: %s\n", e.what());
+    } catch (...) {
+        std::fprintf(stderr, "sfd-replay: unexpected failure\n");
+    }
+    return 1;
 }

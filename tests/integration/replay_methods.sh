@@ -3,11 +3,13 @@
 # integration.replay_methods: every method of sfd-replay (none, parity, oprf, ransac1, ransacf,
 # both) runs the node's filter path on one sfd-sim log with TRUTH (the filter started from TRUTH,
 # filter.init_from_truth) and:
-#  - each summary holds the scores and a position RMSE over every frame after the start;
+#  - each summary holds the scores (strict recall) and a position RMSE over every frame after the
+#    start;
 #  - oprf twice gives byte-identical OUT and summary (seeded hypotheses);
 #  - OUT holds one SFD_STATE per judged frame, decodable with LCM's Python types;
 #  - with 15% mistracked features, oprf, ransac1 and both keep the position closer to TRUTH than
-#    no association (none), and find more than half of the spurious features.
+#    no association (none), and find most of the jumps they test (strict jump recall above 0.4,
+#    tested recall over all kinds above 0.4).
 # usage: replay_methods.sh BUILD_DIR PYTHON PYTHONPATH_FOR_TYPES
 set -euo pipefail
 build="$1"; py="$2"; pytypes="$3"
@@ -29,15 +31,29 @@ import json, sys, collections
 import lcm
 from sfd import nav_state_t
 d = sys.argv[1]
-s = {m: json.load(open(f"{d}/{m}.json"))["methods"][m] for m in
-     ["none", "parity", "oprf", "ransac1", "ransacf", "both"]}
-for m, v in s.items():
-    assert v["state_frames"] >= 110, (m, v)
-    print(f"{m:8s} precision {v['precision']:.3f} recall {v['recall']:.3f} f1 {v['f1']:.3f} "
-          f"far {v['false_alarm_rate']:.4f} rmse {v['position_rmse_m']:.3f} m")
+summ = {m: json.load(open(f"{d}/{m}.json")) for m in
+        ["none", "parity", "oprf", "ransac1", "ransacf", "both"]}
+s = {}
+for m, j in summ.items():
+    assert j["method"] == m and j["filter_start"] == "truth", j
+    v, tr = j["detection"], j["trajectory"]
+    assert tr["frames"] >= 110, (m, tr)
+    v["rmse"] = tr["rmse_raw_m"]  # the filter starts from TRUTH: the unaligned error
+    s[m] = v
+    print(f"{m:8s} precision {v['precision'] or 0:.3f} recall {v['recall']:.3f} f1 {v['f1']:.3f} "
+          f"far {v['false_alarm_rate']:.4f} coverage {v['coverage']:.3f} rmse {v['rmse']:.3f} m")
 for m in ["oprf", "ransac1", "both"]:
-    assert s[m]["position_rmse_m"] < s["none"]["position_rmse_m"], (m, s[m], s["none"])
-    assert s[m]["recall"] > 0.5, (m, s[m])
+    assert s[m]["rmse"] < s["none"]["rmse"], (m, s[m], s["none"])
+    # Strict recall counts the spurious observations the method left UNTESTED (OPRF and RANSAC1
+    # leave a flagged track's next observations untested: about half of them here); the tested
+    # ones are mostly found. Since sfd-sim's tracker fault model (apps/sim/SIMULATION.md: a third
+    # each of jumps 5-30 px, drifts 0.3-2 px/frame, one-frame mismatches 15-60 px) replaced the
+    # constant 12 px jumps, the slow drifts are rarely found by any method (tested recall ~0.15)
+    # and pull the overall recall down (oprf: tested 0.47, strict 0.32 at seed 5): the check is on
+    # the jumps, which play the old fault's part (tested recall ~0.93, strict ~0.48).
+    j = s[m]["by_kind"]["jump"]
+    assert j["detected"] > 0.8 * (j["spurious"] - j["untested"]), (m, j)
+    assert j["recall"] > 0.4 and s[m]["recall_tested"] > 0.4, (m, s[m])
 c = collections.Counter()
 for ev in lcm.EventLog(f"{d}/oprf.lcmlog", "r"):
     c[ev.channel] += 1

@@ -80,11 +80,16 @@ for m in none parity oprf ransac1 ransacf both; do
   "$py" - "$tmp/$m.json" "$m" "$frames" <<'PYEOF'
 import json, math, sys
 path, m, frames = sys.argv[1], sys.argv[2], int(sys.argv[3])
-s = json.load(open(path))["methods"][m]
-assert s["frames_scored"] == frames, s
-assert s["state_frames"] >= frames - 2 and math.isfinite(s["position_rmse_m"]), s
-print(f"{m:8s} precision {s['precision']:.3f} recall {s['recall']:.3f} f1 {s['f1']:.3f} "
-      f"far {s['false_alarm_rate']:.4f} rmse {s['position_rmse_m']:.3f} m")
+s = json.load(open(path))
+assert s["method"] == m and s["truth"] == {"frames": frames, "undecodable": 0}, s["truth"]
+d, tr = s["detection"], s["trajectory"]
+assert d["labelled"] == d["spurious"] + d["clean"] > 0, d
+assert sum(v["spurious"] for v in d["by_kind"].values()) == d["spurious"], d
+assert d["by_kind"]["moving"]["spurious"] > 0 and d["by_kind"]["unspecified"]["spurious"] == 0, d
+assert tr["frames"] >= frames - 2 and math.isfinite(tr["rmse_raw_m"]), tr
+print(f"{m:8s} precision {d['precision'] or 0:.3f} recall {d['recall']:.3f} f1 {d['f1']:.3f} "
+      f"far {d['false_alarm_rate']:.4f} coverage {d['coverage']:.3f} "
+      f"rmse {tr['rmse_raw_m']:.3f} m ate {tr['ate_m']:.3f} m")
 PYEOF
 done
 echo "semireal V1_02: counts, determinism and every method's replay checked"
