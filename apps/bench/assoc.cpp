@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "sfd/sfd.h"
+#include "sfd_eval.hpp"
 #include "sfd_pair_sim.h"
 
 namespace {
@@ -46,12 +47,11 @@ struct Stats {
             tn += (!out && !f);
         }
     }
+    // The one percentile rule of every sfd tool (sfd_eval.hpp: nearest rank).
     static double pct_of(const std::vector<double> &v, double q) {
-        if (v.empty()) return 0.0;
         std::vector<double> s = v;
         std::sort(s.begin(), s.end());
-        const size_t k = size_t(std::lround(q * double(s.size() - 1)));
-        return s[std::min(k, s.size() - 1)];
+        return sfdeval::percentile_sorted(s, q);
     }
     double pct(double q) const { return pct_of(us, q); }
     std::string hyp_text() const {
@@ -61,13 +61,19 @@ struct Stats {
         return b;
     }
     double pct_total(double q) const { return pct_of(total_us, q); }
-    double precision() const { return (tp + fp) ? double(tp) / double(tp + fp) : 1.0; }
-    double recall() const { return (tp + fn) ? double(tp) / double(tp + fn) : 1.0; }
-    double f1() const {
-        if (tp + fp + fn == 0) return 1.0;  // no outliers and none flagged
-        const double p = precision(), r = recall();
-        return (p + r > 0) ? 2 * p * r / (p + r) : 0.0;
+    // Scores by sfd_eval's rule (every match is tested here: strict and lenient recall agree);
+    // undefined (NaN, printed "nan") where the denominator is empty, never a made-up 1.0.
+    sfdeval::DetectionScores scores() const {
+        sfdeval::DetectionCounts c;
+        c.tp = tp;
+        c.fp = fp;
+        c.fn = fn;
+        c.tn = tn;
+        return sfdeval::score(c);
     }
+    double precision() const { return scores().precision; }
+    double recall() const { return scores().recall; }
+    double f1() const { return scores().f1; }
 };
 
 struct Method {

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "sfd/sfd.h"
+#include "sfd_eval.hpp"
 #include "sfd_scene_sim.h"
 
 int bench_assoc(int argc, char **argv);  // assoc.cpp
@@ -68,8 +69,8 @@ bool run(int N, int L, int n, int known, int frames, uint64_t seed, Result *res)
         }
     }
     std::sort(times.begin(), times.end());
-    res->median_us = times[times.size() / 2];
-    res->p99_us = times[std::min(times.size() - 1, size_t(0.99 * double(times.size())))];
+    res->median_us = sfdeval::percentile_sorted(times, 0.5);
+    res->p99_us = sfdeval::percentile_sorted(times, 0.99);  // nearest rank, as every sfd tool
     res->max_us = times.back();
     res->spurious_frac = judged ? double(spurious) / double(judged) : 0.0;
     return true;

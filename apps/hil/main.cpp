@@ -26,10 +26,12 @@
 #include <string>
 #include <thread>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "flight_log.hpp"
 #include "sfd_app_config.hpp"
+#include "sfd_eval.hpp"
 #include "sfd_feature_frame_t.h"
 #include "sfd_feature_verdict_t.h"
 #include "sfd_hil_paths.h"  // SFD_HIL_PYTHON, SFD_HIL_PLOT_SCRIPT (generated)
@@ -313,33 +315,11 @@ int play_log(const std::string &path, sfdsim::FlightSink &sink, long *events, st
     return rc;
 }
 
-struct Stats {
-    size_t n = 0;
-    double min = 0, median = 0, p99 = 0, p999 = 0, max = 0, mean = 0, sd = 0;
-};
-
-// Nearest-rank percentiles.
+// Latency statistics by the one rule of every sfd tool (sfd_eval.hpp: nearest-rank percentiles,
+// sample standard deviation).
+using Stats = sfdeval::Spread;
 Stats stats_of(std::vector<double> v) {
-    Stats s;
-    s.n = v.size();
-    if (v.empty()) return s;
-    std::sort(v.begin(), v.end());
-    auto pct = [&](double p) {
-        const size_t r = static_cast<size_t>(std::ceil(p * double(v.size())));
-        return v[std::min(v.size() - 1, r == 0 ? 0 : r - 1)];
-    };
-    s.min = v.front();
-    s.max = v.back();
-    s.median = pct(0.5);
-    s.p99 = pct(0.99);
-    s.p999 = pct(0.999);
-    double sum = 0;
-    for (double x : v) sum += x;
-    s.mean = sum / double(v.size());
-    double ss = 0;
-    for (double x : v) ss += (x - s.mean) * (x - s.mean);
-    s.sd = v.size() > 1 ? std::sqrt(ss / double(v.size() - 1)) : 0.0;
-    return s;
+    return sfdeval::spread_of(std::move(v));
 }
 
 void usage(FILE *out) {
