@@ -63,6 +63,17 @@ struct Options {
     double track_loss = 0.02;
     double mover_speed = 0.5;
     double random_fraction = 1.0;  // worst-case
+    // flight logs (-o): rest start and IMU model (apps/sim/SIMULATION.md)
+    double rest_s = 2.0;
+    double ramp_s = 3.0;
+    double gyro_noise = 3.4e-4;
+    double accel_noise = 4.0e-3;
+    double gyro_bias_rw = 3.9e-5;
+    double accel_bias_rw = 6.0e-3;
+    bool gyro_bias_given = false;
+    double gyro_bias[3] = {0.0, 0.0, 0.0};
+    bool accel_bias_given = false;
+    double accel_bias[3] = {0.0, 0.0, 0.0};
 };
 
 void usage(FILE *out) {
@@ -70,10 +81,21 @@ void usage(FILE *out) {
         out,
         "usage: sfd-sim SCENARIO [options]          (a summary, no log)\n"
         "       sfd-sim SCENARIO -o OUT.lcmlog [...] (a sensor log for sfd-replay/node)\n"
-        "Log scenarios (-o): IMU 200 Hz, CAMERA_INFO, FEATURES 20 Hz, TRUTH\n"
-        "  paper-uav      helicopter at 58 m over flat ground, fault k(-1,1) (normalized)\n"
-        "  mistracking    20 m altitude, tracks jumping by --jump-px\n"
-        "  moving-object  20 m altitude, 10%% of landmarks moving at 3 m/s, + mistracking\n"
+        "Log scenarios (-o): IMU 200 Hz, CAMERA_INFO, FEATURES 20 Hz, TRUTH (with the kind of\n"
+        "each spurious feature). Every flight starts at rest (--rest-s), then ramps smoothly\n"
+        "into its trajectory; IMU with white noise and random-walk biases (below). Faults as a\n"
+        "tracker makes them (apps/sim/SIMULATION.md):\n"
+        "  paper-uav      helicopter at 58 m over flat ground, the paper's fault k(-1,1)\n"
+        "                 (normalized) added to a track from a step on (--fault-magnitude)\n"
+        "  mistracking    20 m altitude over ground with relief; static tracker faults,\n"
+        "                 each a third of the spurious observations: jump onto another\n"
+        "                 static point 5-30 px away (own depth, followed for good), drift\n"
+        "                 0.3-2 px/frame for 3-10 frames then locked onto the point under\n"
+        "                 it, one-frame mismatch with a point 15-60 px away;\n"
+        "                 --outlier-ratio of the observations\n"
+        "  moving-object  as mistracking, plus 2-4 rigid moving groups (walkers 1-2 m/s,\n"
+        "                 vehicles 5-15 m/s) crossing the view: half of --outlier-ratio moving,\n"
+        "                 half static tracker faults\n"
         "  euroc-semireal EuRoC IMU + ground truth (--euroc DIR), simulated landmarks (below)\n"
         "  worst-case     the node at full capacity (sfd-hil): the mistracking flight with\n"
         "                 --features N (default and max %d = SFD_MAX_FEATURES of this build,\n"
@@ -82,7 +104,7 @@ void usage(FILE *out) {
         "                 track ids; TRUTH: spurious), F = --random-fraction (1.0). At F = 1\n"
         "                 every match is an outlier: OPRF/RANSAC use their whole hypothesis\n"
         "                 budget every frame once the filter runs, every parity group fails\n"
-        "                 and goes into isolation. No mistracks (--outlier-ratio ignored).\n"
+        "                 and goes into isolation. No tracker faults (--outlier-ratio ignored).\n"
         "Summary scenarios:\n"
         "  paper-uav   Tornqvist et al. 2008 Section IV: helicopter at 58 m, downward\n"
         "              camera, features over 40x40 m; parity test Monte Carlo: P_fa and\n"
@@ -107,19 +129,35 @@ void usage(FILE *out) {
         "  --quick             thesis-loop: two levels per sweep (5/20, 0/10, 0/30 %%)\n"
         "  --features N        isolation / uav-imu: features (240 / 200, max %d)\n"
         "  --outlier-ratio R   isolation: fraction of spurious features (0.1)\n"
-        "  --jump-px P         isolation: mistrack jump (8 px)\n"
+        "  --jump-px P         isolation: mistrack jump (8 px; flight logs draw 5-30 px)\n"
         "  --alpha A           uav-imu: false-alarm rate of the printed thresholds\n"
         "  --csv-dir DIR       write the scenario's CSV files into DIR (created if missing)\n"
         "  -o OUT.lcmlog       write a sensor log (log scenarios above)\n"
-        "  --fault-magnitude K paper-uav log: k of k(-1,1) in normalized units (0.02)\n"
+        "Flight log options (paper-uav, mistracking, moving-object, worst-case with -o):\n"
+        "  --frames N          20 Hz frames in all, the rest included (400)\n"
+        "  --features N        static tracks per frame (200; worst-case %d)\n"
+        "  --outlier-ratio R   target fraction of spurious observations (0.1); paper-uav: a\n"
+        "                      fraction R / (W - 1) of the tracks get the fault each frame\n"
+        "  --fault-magnitude K paper-uav: k of k(-1,1) in normalized units (0.02)\n"
         "  --depth-var V       depth prior variance written with the features (0 m^2)\n"
         "  --pixel-noise S     pixel noise (1 px)\n"
-        "  --truth-window W    frames a mistracked track is labelled spurious: the\n"
-        "                      windows that mix the old and new point, L - 1 (2)\n"
+        "  --truth-window W    frames a step (jump, drift step, mismatch and its return)\n"
+        "                      labels the track spurious, from the step: the windows that mix\n"
+        "                      both sides of it, L - 1 (2); moving points: every frame\n"
+        "  --rest-s T          seconds at rest at the start (2.0; 0: start in motion, no ramp)\n"
+        "  --ramp-s T          seconds of the C2 ramp from rest into the trajectory (3.0)\n"
+        "  --gyro-noise D      gyro white noise density (3.4e-4 rad/s/sqrt(Hz))\n"
+        "  --accel-noise D     accelerometer white noise density (4.0e-3 m/s^2/sqrt(Hz))\n"
+        "  --gyro-bias-rw D    gyro bias random walk (3.9e-5 rad/s^2/sqrt(Hz))\n"
+        "  --accel-bias-rw D   accelerometer bias random walk (6.0e-3 m/s^3/sqrt(Hz))\n"
+        "                      (the densities of apps/config/sfd.yaml; per 5 ms sample:\n"
+        "                      sigma = D / sqrt(dt), bias += D_rw * sqrt(dt) * N(0, 1))\n"
+        "  --gyro-bias X,Y,Z   initial gyro bias (rad/s; default drawn, N(0, 0.002^2))\n"
+        "  --accel-bias X,Y,Z  initial accelerometer bias (m/s^2; default drawn, N(0, 0.02^2))\n"
         "  --random-fraction F worst-case: fraction of features replaced by random\n"
         "                      pixels every frame, 0..1 (1.0)\n"
         "Exit: 0 ok, 2 bad usage, 1 internal failure.\n",
-        SFD_MAX_FEATURES, SFD_MAX_FEATURES);
+        SFD_MAX_FEATURES, SFD_MAX_FEATURES, SFD_MAX_FEATURES);
     sfdsim::thesis_loop_help(out);
     sfdsim::semireal_help(out);
 }
@@ -129,6 +167,22 @@ bool parse_int(const char *s, long lo, long hi, long *out) {
     const long v = std::strtol(s, &end, 10);
     if (end == s || *end != '\0' || v < lo || v > hi) return false;
     *out = v;
+    return true;
+}
+
+// "X,Y,Z": three finite numbers of magnitude <= lim.
+bool parse_vec3(const char *s, double lim, double out[3]) {
+    double v[3];
+    const char *p = s;
+    for (int k = 0; k < 3; ++k) {
+        char *end = nullptr;
+        v[k] = std::strtod(p, &end);
+        if (end == p || !(std::fabs(v[k]) <= lim)) return false;
+        if (k < 2 && *end != ',') return false;
+        if (k == 2 && *end != '\0') return false;
+        p = end + 1;
+    }
+    for (int k = 0; k < 3; ++k) out[k] = v[k];
     return true;
 }
 
@@ -437,6 +491,41 @@ int main(int argc, char **argv) {
                 }
                 *r.dst = x;
             }
+        } else if ((!std::strcmp(a, "--rest-s") || !std::strcmp(a, "--ramp-s") ||
+                    !std::strcmp(a, "--gyro-noise") || !std::strcmp(a, "--accel-noise") ||
+                    !std::strcmp(a, "--gyro-bias-rw") || !std::strcmp(a, "--accel-bias-rw")) &&
+                   i + 1 < argc) {
+            char *end = nullptr;
+            const double x = std::strtod(argv[++i], &end);
+            struct Range {
+                const char *flag;
+                double lo, hi;
+                double *dst;
+            } ranges[] = {{"--rest-s", 0.0, 3600.0, &opt.rest_s},
+                          {"--ramp-s", 0.1, 600.0, &opt.ramp_s},
+                          {"--gyro-noise", 0.0, 1.0, &opt.gyro_noise},
+                          {"--accel-noise", 0.0, 10.0, &opt.accel_noise},
+                          {"--gyro-bias-rw", 0.0, 1.0, &opt.gyro_bias_rw},
+                          {"--accel-bias-rw", 0.0, 10.0, &opt.accel_bias_rw}};
+            for (const Range &r : ranges) {
+                if (std::strcmp(a, r.flag) != 0) continue;
+                if (*end != '\0' || !(x >= r.lo && x <= r.hi)) {
+                    std::fprintf(stderr, "sfd-sim: %s: expected %g..%g, got %s\n", a, r.lo, r.hi,
+                                 argv[i]);
+                    return 2;
+                }
+                *r.dst = x;
+            }
+        } else if ((!std::strcmp(a, "--gyro-bias") || !std::strcmp(a, "--accel-bias")) &&
+                   i + 1 < argc) {
+            const bool gyro = !std::strcmp(a, "--gyro-bias");
+            const double lim = gyro ? 1.0 : 10.0;
+            if (!parse_vec3(argv[++i], lim, gyro ? opt.gyro_bias : opt.accel_bias)) {
+                std::fprintf(stderr, "sfd-sim: %s: expected X,Y,Z with |X|,|Y|,|Z| <= %g, got %s\n",
+                             a, lim, argv[i]);
+                return 2;
+            }
+            (gyro ? opt.gyro_bias_given : opt.accel_bias_given) = true;
         } else if (!std::strcmp(a, "--csv-dir") && i + 1 < argc) {
             opt.csv_dir = argv[++i];
         } else if (a[0] != '-' && opt.scenario == nullptr) {
@@ -495,10 +584,21 @@ int main(int argc, char **argv) {
         fo.random_fraction = opt.random_fraction;
         fo.outlier_ratio = opt.outlier_ratio;
         fo.fault_magnitude = opt.fault_magnitude;
-        fo.jump_px = opt.jump_px;
         fo.depth_var = opt.depth_var;
         fo.pixel_noise_px = opt.pixel_noise;
         fo.truth_window = opt.truth_window;
+        fo.rest_s = opt.rest_s;
+        fo.ramp_s = opt.ramp_s;
+        fo.gyro_noise = opt.gyro_noise;
+        fo.accel_noise = opt.accel_noise;
+        fo.gyro_bias_rw = opt.gyro_bias_rw;
+        fo.accel_bias_rw = opt.accel_bias_rw;
+        fo.gyro_bias_given = opt.gyro_bias_given;
+        fo.accel_bias_given = opt.accel_bias_given;
+        for (int k = 0; k < 3; ++k) {
+            fo.gyro_bias[k] = opt.gyro_bias[k];
+            fo.accel_bias[k] = opt.accel_bias[k];
+        }
         return sfdsim::write_flight_log(fo);
     }
     if (!std::strcmp(opt.scenario, "paper-uav")) {

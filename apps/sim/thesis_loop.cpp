@@ -77,6 +77,7 @@
 #include <vector>
 
 #include "sfd/sfd.h"
+#include "sfd_eval.hpp"
 
 namespace sfdsim {
 namespace {
@@ -546,11 +547,11 @@ double mean_of(const std::vector<double> &v) {
     return v.empty() ? 0.0 : s / static_cast<double>(v.size());
 }
 
+// Nearest-rank median, the one percentile rule of every sfd tool (sfd_eval.hpp); 0 for none.
 double median_of(std::vector<double> v) {
     if (v.empty()) return 0.0;
     std::sort(v.begin(), v.end());
-    const size_t h = v.size() / 2;
-    return (v.size() % 2 != 0U) ? v[h] : 0.5 * (v[h - 1] + v[h]);
+    return sfdeval::percentile_sorted(v, 0.5);
 }
 
 /// Standard error of the mean of a sample (0 for fewer than two values).
