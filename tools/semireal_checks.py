@@ -122,14 +122,24 @@ def check_imu(data):
                 "  ".join("%2d s: %.2f m %.2f m/s" % (k, *marks[k]) for k in sorted(marks))))
 
 
+def decode_truth(data):
+    """A TRUTH message: truth_t, or truth_v1_t for logs written before kind[] (LCM's fingerprint
+    differs, so truth_t refuses those)."""
+    from sfd import truth_t, truth_v1_t
+    try:
+        return truth_t.decode(data)
+    except ValueError:
+        return truth_v1_t.decode(data)
+
+
 def check_kinds(path):
     sys.path.insert(0, os.environ.get("SFD_LCM_PYTHON", ""))
     import lcm
-    from sfd import feature_verdict_t, truth_t
+    from sfd import feature_verdict_t
     truth, verdict = {}, {}
     for ev in lcm.EventLog(path, "r"):
         if ev.channel == "TRUTH":
-            m = truth_t.decode(ev.data)
+            m = decode_truth(ev.data)
             truth[m.utime] = {m.track_id[i]: m.spurious[i] for i in range(m.num_features)}
         elif ev.channel == "SFD_VERDICT":
             m = feature_verdict_t.decode(ev.data)
@@ -154,7 +164,7 @@ def check_kinds(path):
 def check_trace(path, every):
     sys.path.insert(0, os.environ.get("SFD_LCM_PYTHON", ""))
     import lcm
-    from sfd import nav_state_t, truth_t
+    from sfd import nav_state_t
     st, tr = {}, {}
     for ev in lcm.EventLog(path, "r"):
         if ev.channel == "SFD_STATE":
@@ -162,7 +172,7 @@ def check_trace(path, every):
             st[m.utime] = (np.array(m.position), np.array(m.velocity), m.orientation,
                            np.sqrt(np.array(m.position_var)))
         elif ev.channel == "TRUTH":
-            m = truth_t.decode(ev.data)
+            m = decode_truth(ev.data)
             tr[m.utime] = (np.array(m.position), m.orientation)
     ts = sorted(set(st) & set(tr))
     print("   t (s)  |dp| (m)  |dv| (m/s)  attitude (deg)  position sd (m, x y z)")
