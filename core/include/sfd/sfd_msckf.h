@@ -1,0 +1,124 @@
+/* SPDX-License-Identifier: MIT */
+/**
+ * @file sfd_msckf.h
+ * @brief The measurement side of a sliding-window (multi-state constraint) Kalman filter
+ *        (Mourikis & Roumeliotis 2007; core/docs/msckf.md): one track's residual projected onto
+ *        the left null space of its landmark Jacobian, its chi-square gate, the incremental QR
+ *        compression of every accepted track into at most n rows, and the Kalman update from
+ *        the compressed rows.
+ *
+ * A track seen in m clones of the window gives the linearized, stacked reprojection residual
+ *
+ *     r = H_x dx + H_f dp_f + n,   n ~ N(0, R),                                     (1)
+ *
+ * (2m rows; one more when the wire's depth prior enters as a measurement), with dx the filter's
+ * error state (n <= SFD_MSCKF_DIM: IMU state and the window's clones, in the caller's order), dp_f
+ * the error of the track's triangulated point and R the pixel noise carried through the camera's
+ * distortion Jacobian (block diagonal, not isotropic). With N an orthonormal basis of the left null
+ * space of H_f (N^T H_f = 0, rank H_f = 3):
+ *
+ *     r_o = N^T r = N^T H_x dx + N^T n,   S_o = N^T H_x P H_x^T N + N^T R N,            (2)
+ *     gamma = r_o^T S_o^-1 r_o ~ chi2(rows - 3) for a consistent track,                (3)
+ *
+ * the parity-space test of Tornqvist et al. 2008 (Section III) with the translation known from
+ * the filter and Cov(z) from its covariance. Accepted tracks are whitened by N^T R N and folded by
+ * Givens rotations into an upper-triangular [T | q] of at most n rows (the least-squares
+ * compression: the rows a rotation leaves outside the triangle carry no information on dx), and
+ * the update (4) uses those rows with unit noise:
+ *
+ *     S = T P T^T + I,  K = P T^T S^-1,  dx = K q,  P <- (I - K T) P (I - K T)^T + K K^T.  (4)
+ *
+ * Every array has a fixed capacity (SFD_MSCKF_DIM, SFD_MSCKF_TRACK_ROWS); sizes beyond it are a
+ * status code, never a write past an array. No heap, no global state, no recursion; the large
+ * scratch matrices of the update live in a caller-owned sfd_msckf_work_t, not on the stack.
+ */
+#ifndef SFD_MSCKF_H
+#define SFD_MSCKF_H
+#include <stdint.h>
+#include "sfd_config.h"
+#include "sfd_status.h"
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Largest error-state dimension: 15 IMU error states and 6 per clone of a full window. */
+#define SFD_MSCKF_DIM (15 + 6 * SFD_MAX_WINDOW)
+/** Largest number of rows of one track: 2 per clone and one depth prior. */
+#define SFD_MSCKF_TRACK_ROWS (2 * SFD_MAX_WINDOW + 1)
+
+/** One track's linearized residual (1), then (after sfd_msckf_track_project) its projection (2).
+ *  Caller-owned; fill rows, n, Hx, Hf, r and R, rows and columns beyond them are not read. */
+typedef struct {
+    int32_t rows; /**< measurement rows in use: 4..SFD_MSCKF_TRACK_ROWS before the projection */
+    int32_t n;    /**< error-state columns in use, 1..SFD_MSCKF_DIM */
+    int32_t projected; /**< 1 once sfd_msckf_track_project() succeeded (rows = rows - 3) */
+    double Hx[SFD_MSCKF_TRACK_ROWS][SFD_MSCKF_DIM];       /**< Jacobian of r on dx */
+    double Hf[SFD_MSCKF_TRACK_ROWS][3];                   /**< Jacobian of r on the point (m) */
+    double r[SFD_MSCKF_TRACK_ROWS];                       /**< residual z - h(x^, p^_f) (px, m) */
+    double R[SFD_MSCKF_TRACK_ROWS][SFD_MSCKF_TRACK_ROWS]; /**< noise covariance of r, SPD */
+} sfd_msckf_track_t;
+
+/** The incremental QR compression [T | q] of the accepted tracks of one update (caller-owned). */
+typedef struct {
+    int32_t n;          /**< error-state dimension */
+    int32_t folded;     /**< whitened rows folded in since the reset */
+    double residual_ss; /**< sum of squares the triangle cannot explain (chi2(folded - rank)) */
+    uint8_t used[SFD_MSCKF_DIM];                 /**< 1: row k of the triangle holds a pivot */
+    double Tq[SFD_MSCKF_DIM][SFD_MSCKF_DIM + 1]; /**< row k: T's row with pivot k, then q_k */
+} sfd_msckf_stack_t;
+
+/** Scratch of sfd_msckf_update() (caller-owned; no content is kept between calls). */
+typedef struct {
+    double A[SFD_MSCKF_DIM][SFD_MSCKF_DIM];
+    double B[SFD_MSCKF_DIM][SFD_MSCKF_DIM];
+    double K[SFD_MSCKF_DIM][SFD_MSCKF_DIM];
+    double S[SFD_MSCKF_DIM][SFD_MSCKF_DIM];
+} sfd_msckf_work_t;
+
+/**
+ * @brief Projects the track's residual onto the left null space of H_f, eq. (2): Givens rotations
+ *        Q^T (applied to Hx, Hf, r and from both sides to R) make H_f upper triangular; the last
+ *        rows - 3 rows are N^T H_x, N^T r, N^T R N, moved to the top (rows becomes rows - 3).
+ * @return SFD_OK; SFD_ERR_INVAL (null, rows outside 4..SFD_MSCKF_TRACK_ROWS, n outside
+ *         1..SFD_MSCKF_DIM, already projected, a non-finite entry; nothing written);
+ *         SFD_ERR_NUMERIC when H_f has rank below 3 (no parallax: a pivot below 1e-9 times the
+ *         Frobenius norm of H_f); then the rows hold Q^T of the inputs and the track must be
+ *         discarded (projected stays 0).
+ */
+sfd_status_t sfd_msckf_track_project(sfd_msckf_track_t *track);
+
+/**
+ * @brief The gate statistic of a projected track, eq. (3): gamma = r_o^T S_o^-1 r_o with
+ *        S_o = H_o P H_o^T + R_o, and its degrees of freedom (the projected rows).
+ * @param P error-state covariance, row-major with row stride SFD_MSCKF_DIM, n x n, symmetric.
+ * @return SFD_OK; SFD_ERR_INVAL (null, not projected, no rows); SFD_ERR_NUMERIC when S_o is not
+ *         positive definite or gamma is not finite (*gamma, *dof unchanged).
+ */
+sfd_status_t sfd_msckf_track_gate(const sfd_msckf_track_t *track, const double *P, double *gamma,
+                                  int32_t *dof);
+
+/** @brief Empties the compression for an n-dimensional error state (1..SFD_MSCKF_DIM). */
+sfd_status_t sfd_msckf_stack_reset(sfd_msckf_stack_t *stack, int32_t n);
+
+/**
+ * @brief Folds a projected track into [T | q]: whitens its rows by the Cholesky factor L of
+ *        R_o (L^-1 H_o, L^-1 r_o: unit noise), then rotates each row into the triangle.
+ * @return SFD_OK; SFD_ERR_INVAL (null, not projected, n differs from the stack's);
+ *         SFD_ERR_NUMERIC when R_o is not positive definite (stack unchanged).
+ */
+sfd_status_t sfd_msckf_stack_fold(sfd_msckf_stack_t *stack, const sfd_msckf_track_t *track);
+
+/**
+ * @brief The Kalman update (4) from the compressed rows: dx (n values) and P in place (Joseph
+ *        form, symmetrized). With no row folded, dx = 0 and P is unchanged.
+ * @param P row stride SFD_MSCKF_DIM, n x n, symmetric positive semi-definite.
+ * @return SFD_OK; SFD_ERR_INVAL (null); SFD_ERR_NUMERIC when S is not positive definite or the
+ *         result is not finite (P and dx unchanged).
+ */
+sfd_status_t sfd_msckf_update(const sfd_msckf_stack_t *stack, double *P, double *dx,
+                              sfd_msckf_work_t *work);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* SFD_MSCKF_H */

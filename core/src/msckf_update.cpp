@@ -1,0 +1,295 @@
+// SPDX-License-Identifier: MIT
+// The measurement side of the sliding-window filter (sfd_msckf.h, core/docs/msckf.md): null-space
+// projection of a track (eq. (2)), its chi-square statistic (eq. (3)), the incremental QR
+// compression of the accepted tracks and the Kalman update from it (eq. (4)).
+#include "core_private.hpp"
+#include "sfd/sfd_msckf.h"
+#include "small_linalg.hpp"
+
+namespace sfd {
+namespace {
+
+constexpr int kDim = SFD_MSCKF_DIM;
+constexpr int kRows = SFD_MSCKF_TRACK_ROWS;
+
+/// The Givens rotation (c, s) with [c s; -s c]^T-free form: for a pair (a, b) it gives
+/// c a + s b = rho, -s a + c b = 0 (rho = hypot(a, b)); (1, 0) when both are zero.
+void givens(double a, double b, double *c, double *s) {
+    if (!(std::fabs(b) > 0.0)) {  // b is zero: nothing to rotate
+        *c = 1.0;
+        *s = 0.0;
+        return;
+    }
+    const double rho = std::hypot(a, b);
+    *c = a / rho;
+    *s = b / rho;
+}
+
+/// Rows i and k of a row-major array: (x_i, x_k) <- (c x_i + s x_k, -s x_i + c x_k) over
+/// columns [from, to).
+template <std::size_t K>
+void rotate_rows(double (*M)[K], int i, int k, double c, double s, int from, int to) {
+    for (int j = from; j < to; ++j) {
+        const double a = M[i][j], b = M[k][j];
+        M[i][j] = c * a + s * b;
+        M[k][j] = -s * a + c * b;
+    }
+}
+
+/// Columns i and k of R (R <- R G^T, the other half of G R G^T).
+void rotate_cols(double (*M)[kRows], int rows, int i, int k, double c, double s) {
+    for (int r = 0; r < rows; ++r) {
+        const double a = M[r][i], b = M[r][k];
+        M[r][i] = c * a + s * b;
+        M[r][k] = -s * a + c * b;
+    }
+}
+
+bool track_finite(const sfd_msckf_track_t &t) {
+    for (int i = 0; i < t.rows; ++i) {
+        if (!all_finite(t.Hx[i], std::size_t(t.n)) || !all_finite(t.Hf[i], 3) ||
+            !std::isfinite(t.r[i]) || !all_finite(t.R[i], std::size_t(t.rows))) {
+            return false;
+        }
+    }
+    return true;
+}
+
+}  // namespace
+}  // namespace sfd
+
+using namespace sfd;
+
+extern "C" sfd_status_t sfd_msckf_track_project(sfd_msckf_track_t *t) {
+    if (t == nullptr || t->projected != 0 || t->rows < 4 || t->rows > kRows || t->n < 1 ||
+        t->n > kDim || !track_finite(*t)) {
+        return SFD_ERR_INVAL;
+    }
+    const int rows = t->rows, n = t->n;
+    double fro = 0.0;
+    for (int i = 0; i < rows; ++i) {
+        for (int j = 0; j < 3; ++j) fro += t->Hf[i][j] * t->Hf[i][j];
+    }
+    fro = std::sqrt(fro);
+    // Q^T by Givens rotations, bottom up per column: H_f becomes upper triangular (its first three
+    // rows); rows 3.. of the rotated system are N^T times the inputs (N: the last rows - 3 columns
+    // of Q, orthonormal and orthogonal to H_f's range).
+    for (int j = 0; j < 3; ++j) {
+        for (int i = rows - 1; i > j; --i) {
+            double c = 1.0, s = 0.0;
+            givens(t->Hf[i - 1][j], t->Hf[i][j], &c, &s);
+            if (!(std::fabs(s) > 0.0)) continue;
+            rotate_rows(t->Hf, i - 1, i, c, s, 0, 3);
+            t->Hf[i][j] = 0.0;
+            rotate_rows(t->Hx, i - 1, i, c, s, 0, n);
+            const double a = t->r[i - 1], b = t->r[i];
+            t->r[i - 1] = c * a + s * b;
+            t->r[i] = -s * a + c * b;
+            rotate_rows(t->R, i - 1, i, c, s, 0, rows);
+            rotate_cols(t->R, rows, i - 1, i, c, s);
+        }
+    }
+    for (int j = 0; j < 3; ++j) {
+        if (!(std::fabs(t->Hf[j][j]) > 1e-9 * fro)) return SFD_ERR_NUMERIC;
+    }
+    // Keep the null-space part: rows and columns 3.. of the rotated system, moved to the top.
+    const int m = rows - 3;
+    for (int i = 0; i < m; ++i) {
+        for (int j = 0; j < n; ++j) t->Hx[i][j] = t->Hx[i + 3][j];
+        for (int j = 0; j < 3; ++j) t->Hf[i][j] = 0.0;
+        t->r[i] = t->r[i + 3];
+        for (int j = 0; j < m; ++j) t->R[i][j] = t->R[i + 3][j + 3];
+    }
+    for (int i = 0; i < m; ++i) {  // exact symmetry: the two rotation passes round differently
+        for (int j = i + 1; j < m; ++j) {
+            const double v = 0.5 * (t->R[i][j] + t->R[j][i]);
+            t->R[i][j] = v;
+            t->R[j][i] = v;
+        }
+    }
+    t->rows = m;
+    t->projected = 1;
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_msckf_track_gate(const sfd_msckf_track_t *t, const double *P,
+                                             double *gamma, int32_t *dof) {
+    if (t == nullptr || P == nullptr || gamma == nullptr || dof == nullptr || t->projected != 1 ||
+        t->rows < 1 || t->rows > kRows || t->n < 1 || t->n > kDim) {
+        return SFD_ERR_INVAL;
+    }
+    const int m = t->rows, n = t->n;
+    double S[kRows][kRows];
+    double hp[kDim];
+    for (int i = 0; i < m; ++i) {
+        for (int l = 0; l < n; ++l) {  // (H_o P)_i
+            double v = 0.0;
+            for (int k = 0; k < n; ++k) v += t->Hx[i][k] * P[k * kDim + l];
+            hp[l] = v;
+        }
+        for (int j = 0; j <= i; ++j) {
+            double v = 0.0;
+            for (int l = 0; l < n; ++l) v += hp[l] * t->Hx[j][l];
+            S[i][j] = v + t->R[i][j];
+            S[j][i] = S[i][j];
+        }
+    }
+    double L[kRows][kRows];
+    if (!la::cholesky(S, m, L)) return SFD_ERR_NUMERIC;
+    double w[kRows];
+    la::forward_solve(L, m, t->r, w);
+    double g = 0.0;
+    for (int i = 0; i < m; ++i) g += w[i] * w[i];
+    if (!std::isfinite(g)) return SFD_ERR_NUMERIC;
+    *gamma = g;
+    *dof = m;
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_msckf_stack_reset(sfd_msckf_stack_t *s, int32_t n) {
+    if (s == nullptr || n < 1 || n > kDim) return SFD_ERR_INVAL;
+    s->n = n;
+    s->folded = 0;
+    s->residual_ss = 0.0;
+    for (int i = 0; i < kDim; ++i) {
+        s->used[i] = 0;
+        for (int j = 0; j <= kDim; ++j) s->Tq[i][j] = 0.0;
+    }
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_msckf_stack_fold(sfd_msckf_stack_t *s, const sfd_msckf_track_t *t) {
+    if (s == nullptr || t == nullptr || t->projected != 1 || t->rows < 1 || t->rows > kRows ||
+        s->n < 1 || s->n > kDim || t->n != s->n) {
+        return SFD_ERR_INVAL;
+    }
+    const int m = t->rows, n = s->n;
+    double L[kRows][kRows];
+    if (!la::cholesky(t->R, m, L)) return SFD_ERR_NUMERIC;
+    // Whitened rows W = L^-1 [H_o | r_o] (forward substitution down the rows).
+    double W[kRows][kDim + 1];
+    for (int i = 0; i < m; ++i) {
+        for (int j = 0; j < n; ++j) {
+            double v = t->Hx[i][j];
+            for (int k = 0; k < i; ++k) v -= L[i][k] * W[k][j];
+            W[i][j] = v / L[i][i];
+        }
+        double v = t->r[i];
+        for (int k = 0; k < i; ++k) v -= L[i][k] * W[k][n];
+        W[i][n] = v / L[i][i];
+    }
+    for (int i = 0; i < m; ++i) {
+        if (!all_finite(W[i], std::size_t(n) + 1)) return SFD_ERR_NUMERIC;
+    }
+    // Each row into the triangle: at column k, a row without pivot k takes the rest of the row;
+    // otherwise a rotation with the pivot row zeroes the entry. What is left in the q column after
+    // every column is the row's part the triangle cannot explain.
+    for (int i = 0; i < m; ++i) {
+        double *v = W[i];
+        bool placed = false;
+        for (int k = 0; k < n && !placed; ++k) {
+            if (!(std::fabs(v[k]) > 0.0)) continue;
+            if (s->used[k] == 0) {
+                for (int j = 0; j < k; ++j) s->Tq[k][j] = 0.0;
+                for (int j = k; j <= n; ++j) s->Tq[k][j] = v[j];
+                s->used[k] = 1;
+                placed = true;
+                break;
+            }
+            double c = 1.0, sn = 0.0;
+            givens(s->Tq[k][k], v[k], &c, &sn);
+            for (int j = k; j <= n; ++j) {
+                const double a = s->Tq[k][j], b = v[j];
+                s->Tq[k][j] = c * a + sn * b;
+                v[j] = -sn * a + c * b;
+            }
+            v[k] = 0.0;
+        }
+        if (!placed) s->residual_ss += v[n] * v[n];
+        ++s->folded;
+    }
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_msckf_update(const sfd_msckf_stack_t *s, double *P, double *dx,
+                                         sfd_msckf_work_t *w) {
+    if (s == nullptr || P == nullptr || dx == nullptr || w == nullptr || s->n < 1 || s->n > kDim) {
+        return SFD_ERR_INVAL;
+    }
+    const int n = s->n;
+    // The compressed rows H (k x n) and q: the triangle's rows that hold a pivot, in w->A.
+    int k = 0;
+    double q[kDim];
+    for (int i = 0; i < n; ++i) {
+        if (s->used[i] == 0) continue;
+        for (int j = 0; j < n; ++j) w->A[k][j] = s->Tq[i][j];
+        q[k] = s->Tq[i][n];
+        ++k;
+    }
+    if (k == 0) {
+        for (int i = 0; i < n; ++i) dx[i] = 0.0;
+        return SFD_OK;
+    }
+    // B = P H^T (n x k); S = H P H^T + I (k x k).
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < k; ++j) {
+            double v = 0.0;
+            for (int l = 0; l < n; ++l) v += P[i * kDim + l] * w->A[j][l];
+            w->B[i][j] = v;
+        }
+    }
+    for (int i = 0; i < k; ++i) {
+        for (int j = 0; j <= i; ++j) {
+            double v = 0.0;
+            for (int l = 0; l < n; ++l) v += w->A[i][l] * w->B[l][j];
+            w->S[i][j] = v + (i == j ? 1.0 : 0.0);
+            w->S[j][i] = w->S[i][j];
+        }
+    }
+    if (!la::cholesky(w->S, k, w->S)) return SFD_ERR_NUMERIC;  // S's factor in place
+    // K = P H^T S^-1: each row of K solves S K_i^T = B_i^T.
+    double dxn[kDim];
+    for (int i = 0; i < n; ++i) {
+        la::chol_solve(w->S, k, w->B[i], w->K[i]);
+        double v = 0.0;
+        for (int j = 0; j < k; ++j) v += w->K[i][j] * q[j];
+        dxn[i] = v;
+    }
+    // Joseph form: A = I - K H (n x n, over w->B), then P' = A P A^T + K K^T (A P in w->S).
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+            double v = 0.0;
+            for (int l = 0; l < k; ++l) v += w->K[i][l] * w->A[l][j];
+            w->B[i][j] = (i == j ? 1.0 : 0.0) - v;
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+            double v = 0.0;
+            for (int l = 0; l < n; ++l) v += w->B[i][l] * P[l * kDim + j];
+            w->S[i][j] = v;
+        }
+    }
+    for (int i = 0; i < n; ++i) {  // into w->A: the new P (H is no longer needed)
+        for (int j = 0; j <= i; ++j) {
+            double v = 0.0;
+            for (int l = 0; l < n; ++l) v += w->S[i][l] * w->B[j][l];
+            double kk = 0.0;
+            for (int l = 0; l < k; ++l) kk += w->K[i][l] * w->K[j][l];
+            w->A[i][j] = v + kk;
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        if (!all_finite(w->A[i], std::size_t(i) + 1) || !std::isfinite(dxn[i])) {
+            return SFD_ERR_NUMERIC;
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        dx[i] = dxn[i];
+        for (int j = 0; j <= i; ++j) {
+            P[i * kDim + j] = w->A[i][j];
+            P[j * kDim + i] = w->A[i][j];
+        }
+    }
+    return SFD_OK;
+}

@@ -1,0 +1,375 @@
+/* SPDX-License-Identifier: MIT */
+/* unit.msckf: the window filter's measurement side (sfd_msckf.h, core/docs/msckf.md): the
+ * projected residual is orthogonal to the landmark Jacobian and has 3 rows fewer; the gate
+ * statistic equals the statistic with the landmark eliminated by weighted least squares (the
+ * parity-space statistic with known translation); it is chi2(rows - 3) for consistent tracks
+ * whatever the landmark error (Monte Carlo with a binomial interval); the QR-compressed update
+ * equals the textbook Kalman update with every projected row; bad sizes and rank-deficient
+ * landmarks are status codes. */
+#include "sfd_test.h"
+
+#include <string.h>
+
+#include <sfd/sfd_chi2.h>
+#include <sfd/sfd_msckf.h>
+#include <sfd/sfd_prng.h>
+
+enum { D = SFD_MSCKF_DIM, TR = SFD_MSCKF_TRACK_ROWS, BIG = 6 * TR };
+
+static sfd_msckf_track_t g_track, g_copy;
+static sfd_msckf_stack_t g_stack;
+static sfd_msckf_work_t g_work;
+static double g_P[D * D], g_P2[D * D];
+
+/* ---- dense helpers of the test (independent of the core's) ---- */
+
+/* X = A^-1 B, n x n A (stride n), n x m B (stride m), Gauss-Jordan with partial pivoting. */
+static int solve_dense(int n, int m, const double *A_in, const double *B_in, double *X) {
+    static double A[BIG * BIG], B[BIG * D];
+    memcpy(A, A_in, sizeof(double) * (size_t)(n * n));
+    memcpy(B, B_in, sizeof(double) * (size_t)(n * m));
+    for (int c = 0; c < n; ++c) {
+        int piv = c;
+        for (int r = c + 1; r < n; ++r) {
+            if (fabs(A[r * n + c]) > fabs(A[piv * n + c])) piv = r;
+        }
+        if (fabs(A[piv * n + c]) < 1e-300) return 0;
+        for (int k = 0; k < n; ++k) {
+            const double t = A[c * n + k];
+            A[c * n + k] = A[piv * n + k];
+            A[piv * n + k] = t;
+        }
+        for (int k = 0; k < m; ++k) {
+            const double t = B[c * m + k];
+            B[c * m + k] = B[piv * m + k];
+            B[piv * m + k] = t;
+        }
+        const double d = A[c * n + c];
+        for (int k = 0; k < n; ++k) A[c * n + k] /= d;
+        for (int k = 0; k < m; ++k) B[c * m + k] /= d;
+        for (int r = 0; r < n; ++r) {
+            if (r == c) continue;
+            const double f = A[r * n + c];
+            if (f == 0.0) continue;
+            for (int k = 0; k < n; ++k) A[r * n + k] -= f * A[c * n + k];
+            for (int k = 0; k < m; ++k) B[r * m + k] -= f * B[c * m + k];
+        }
+    }
+    memcpy(X, B, sizeof(double) * (size_t)(n * m));
+    return 1;
+}
+
+/* A random SPD n x n matrix into P (stride D): M M^T / n + 0.1 I, entries O(1). */
+static void random_spd(sfd_prng_t *rng, int n, double *P) {
+    static double M[D * D];
+    for (int i = 0; i < n * n; ++i) M[i] = sfd_prng_gaussian(rng);
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+            double v = 0.0;
+            for (int k = 0; k < n; ++k) v += M[i * n + k] * M[j * n + k];
+            P[i * D + j] = v / n + (i == j ? 0.1 : 0.0);
+        }
+    }
+}
+
+/* A track of `rows` rows on an n-dimensional state: random Jacobians, block-diagonal 2x2 pixel
+ * noise (a distortion Jacobian's shape: anisotropic, correlated), the last row of an odd count a
+ * depth prior with its own variance. r is left 0. */
+static void random_track(sfd_prng_t *rng, int rows, int n, sfd_msckf_track_t *t) {
+    memset(t, 0, sizeof *t);
+    t->rows = rows;
+    t->n = n;
+    for (int i = 0; i < rows; ++i) {
+        for (int j = 0; j < n; ++j) t->Hx[i][j] = sfd_prng_gaussian(rng);
+        for (int j = 0; j < 3; ++j) t->Hf[i][j] = 3.0 * sfd_prng_gaussian(rng);
+    }
+    for (int i = 0; i + 1 < rows; i += 2) {
+        const double a = 0.5 + sfd_prng_uniform(rng), b = 0.5 + 2.0 * sfd_prng_uniform(rng);
+        const double c = 0.4 * sqrt(a * b) * (2.0 * sfd_prng_uniform(rng) - 1.0);
+        t->R[i][i] = a;
+        t->R[i + 1][i + 1] = b;
+        t->R[i][i + 1] = t->R[i + 1][i] = c;
+    }
+    if (rows % 2 == 1) t->R[rows - 1][rows - 1] = 0.3;
+}
+
+/* ---- tests ---- */
+
+static void projected_residual_is_orthogonal_to_the_landmark_jacobian(void **state) {
+    (void)state;
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 11);
+    for (int rows = 4; rows <= TR; ++rows) {
+        random_track(&rng, rows, 20, &g_track);
+        /* The first 3 columns of Hx are H_f itself: their projection must vanish (N^T H_f = 0);
+         * r is a pure landmark error H_f dp: its projection must vanish too. */
+        const double dp[3] = {0.3, -1.2, 0.7};
+        for (int i = 0; i < rows; ++i) {
+            g_track.r[i] = 0.0;
+            for (int j = 0; j < 3; ++j) {
+                g_track.Hx[i][j] = g_track.Hf[i][j];
+                g_track.r[i] += g_track.Hf[i][j] * dp[j];
+            }
+        }
+        /* Isotropic noise stays isotropic under an orthonormal N. */
+        for (int i = 0; i < rows; ++i) {
+            for (int j = 0; j < rows; ++j) g_track.R[i][j] = i == j ? 2.25 : 0.0;
+        }
+        g_copy = g_track;
+        assert_int_equal(sfd_msckf_track_project(&g_track), SFD_OK);
+        assert_int_equal(g_track.rows, rows - 3);
+        assert_int_equal(g_track.projected, 1);
+        for (int i = 0; i < rows - 3; ++i) {
+            for (int j = 0; j < 3; ++j) assert_true(fabs(g_track.Hx[i][j]) < 1e-12);
+            assert_true(fabs(g_track.r[i]) < 1e-12);
+            for (int j = 0; j < rows - 3; ++j) {
+                assert_true(fabs(g_track.R[i][j] - (i == j ? 2.25 : 0.0)) < 1e-12);
+            }
+        }
+        /* Norms are kept: sum of squares of a column of Hx outside H_f's range does not grow. */
+        double before = 0.0, after = 0.0;
+        for (int i = 0; i < rows; ++i) before += g_copy.Hx[i][5] * g_copy.Hx[i][5];
+        for (int i = 0; i < rows - 3; ++i) after += g_track.Hx[i][5] * g_track.Hx[i][5];
+        assert_true(after <= before + 1e-12);
+        assert_int_equal(sfd_msckf_track_project(&g_track), SFD_ERR_INVAL); /* not twice */
+    }
+}
+
+/* gamma = r^T N (N^T S N)^-1 N^T r equals r^T (S^-1 - S^-1 Hf (Hf^T S^-1 Hf)^-1 Hf^T S^-1) r,
+ * S = Hx P Hx^T + R: the landmark eliminated by weighted least squares. */
+static void gate_equals_the_landmark_eliminated_statistic(void **state) {
+    (void)state;
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 12);
+    const int n = 27;
+    for (int trial = 0; trial < 20; ++trial) {
+        const int rows = 4 + (int)sfd_prng_uniform_index(&rng, (uint32_t)(TR - 3));
+        random_spd(&rng, n, g_P);
+        random_track(&rng, rows, n, &g_track);
+        for (int i = 0; i < rows; ++i) g_track.r[i] = 2.0 * sfd_prng_gaussian(&rng);
+        /* Reference: S, then S^-1 r and S^-1 Hf. */
+        double S[TR * TR] = {0}, SiR[TR] = {0}, SiF[TR * 3] = {0}, rhs[TR * 4] = {0};
+        for (int i = 0; i < rows; ++i) {
+            for (int j = 0; j < rows; ++j) {
+                double v = 0.0;
+                for (int k = 0; k < n; ++k) {
+                    for (int l = 0; l < n; ++l)
+                        v += g_track.Hx[i][k] * g_P[k * D + l] * g_track.Hx[j][l];
+                }
+                S[i * rows + j] = v + g_track.R[i][j];
+            }
+            rhs[i * 4 + 0] = g_track.r[i];
+            for (int j = 0; j < 3; ++j) rhs[i * 4 + 1 + j] = g_track.Hf[i][j];
+        }
+        double X[TR * 4] = {0};
+        assert_true(solve_dense(rows, 4, S, rhs, X));
+        for (int i = 0; i < rows; ++i) {
+            SiR[i] = X[i * 4 + 0];
+            for (int j = 0; j < 3; ++j) SiF[i * 3 + j] = X[i * 4 + 1 + j];
+        }
+        double FtSiF[9] = {0}, FtSiR[3] = {0}, rSiR = 0.0;
+        for (int i = 0; i < rows; ++i) {
+            rSiR += g_track.r[i] * SiR[i];
+            for (int a = 0; a < 3; ++a) {
+                FtSiR[a] += g_track.Hf[i][a] * SiR[i];
+                for (int b = 0; b < 3; ++b) FtSiF[a * 3 + b] += g_track.Hf[i][a] * SiF[i * 3 + b];
+            }
+        }
+        double y[3] = {0.0, 0.0, 0.0};
+        assert_true(solve_dense(3, 1, FtSiF, FtSiR, y));
+        const double ref = rSiR - (FtSiR[0] * y[0] + FtSiR[1] * y[1] + FtSiR[2] * y[2]);
+        assert_int_equal(sfd_msckf_track_project(&g_track), SFD_OK);
+        double gamma = -1.0;
+        int32_t dof = 0;
+        assert_int_equal(sfd_msckf_track_gate(&g_track, g_P, &gamma, &dof), SFD_OK);
+        assert_int_equal(dof, rows - 3);
+        assert_true(fabs(gamma - ref) <= 1e-9 * (1.0 + fabs(ref)));
+    }
+}
+
+/* Consistent tracks: dx ~ N(0, P), noise ~ N(0, R), any landmark error: gamma ~ chi2(rows - 3).
+ * 4000 tracks of 9 rows (dof 6): the mean within 4 standard errors of 6, and the fraction above
+ * the 1 % quantile inside its 99.9 % binomial interval. */
+static void gate_is_chi_square_for_consistent_tracks_whatever_the_landmark_error(void **state) {
+    (void)state;
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 13);
+    const int n = 21, rows = 9, trials = 4000;
+    random_spd(&rng, n, g_P);
+    double Lp[D * D] = {0}; /* Cholesky factor of P (test-side, plain loops) */
+    for (int j = 0; j < n; ++j) {
+        double s = g_P[j * D + j];
+        for (int k = 0; k < j; ++k) s -= Lp[j * D + k] * Lp[j * D + k];
+        Lp[j * D + j] = sqrt(s);
+        for (int i = j + 1; i < n; ++i) {
+            double t = g_P[i * D + j];
+            for (int k = 0; k < j; ++k) t -= Lp[i * D + k] * Lp[j * D + k];
+            Lp[i * D + j] = t / Lp[j * D + j];
+        }
+    }
+    double q99 = 0.0;
+    assert_int_equal(sfd_chi2_quantile_upper(0.01, rows - 3, &q99), SFD_OK);
+    double sum = 0.0;
+    int above = 0;
+    for (int t = 0; t < trials; ++t) {
+        random_track(&rng, rows, n, &g_track);
+        double e[D], dx[D];
+        for (int i = 0; i < n; ++i) e[i] = sfd_prng_gaussian(&rng);
+        for (int i = 0; i < n; ++i) {
+            dx[i] = 0.0;
+            for (int k = 0; k <= i; ++k) dx[i] += Lp[i * D + k] * e[k];
+        }
+        const double dp[3] = {50.0 * sfd_prng_gaussian(&rng), 50.0 * sfd_prng_gaussian(&rng),
+                              50.0 * sfd_prng_gaussian(&rng)};
+        for (int i = 0; i < rows; i += 2) { /* noise with the 2x2 blocks' covariance */
+            if (i + 1 < rows) {
+                const double a = g_track.R[i][i], c = g_track.R[i][i + 1],
+                             b = g_track.R[i + 1][i + 1];
+                const double l11 = sqrt(a), l21 = c / l11, l22 = sqrt(b - l21 * l21);
+                const double u = sfd_prng_gaussian(&rng), v = sfd_prng_gaussian(&rng);
+                g_track.r[i] = l11 * u;
+                g_track.r[i + 1] = l21 * u + l22 * v;
+            } else {
+                g_track.r[i] = sqrt(g_track.R[i][i]) * sfd_prng_gaussian(&rng);
+            }
+        }
+        for (int i = 0; i < rows; ++i) {
+            for (int k = 0; k < n; ++k) g_track.r[i] += g_track.Hx[i][k] * dx[k];
+            for (int k = 0; k < 3; ++k) g_track.r[i] += g_track.Hf[i][k] * dp[k];
+        }
+        assert_int_equal(sfd_msckf_track_project(&g_track), SFD_OK);
+        double gamma = 0.0;
+        int32_t dof = 0;
+        assert_int_equal(sfd_msckf_track_gate(&g_track, g_P, &gamma, &dof), SFD_OK);
+        sum += gamma;
+        above += gamma > q99;
+    }
+    const double mean = sum / trials, se = sqrt(2.0 * (rows - 3) / trials);
+    assert_true(fabs(mean - (rows - 3)) < 4.0 * se);
+    /* Binomial(4000, 0.01): sd 6.3; 99.9 % interval about [21, 61]. */
+    assert_true(above >= 21 && above <= 61);
+}
+
+/* The compressed update equals the Kalman filter with every projected row stacked:
+ * S = H P H^T + R (block diagonal), K = P H^T S^-1, dx = K r, P' = (I - K H) P. */
+static void compressed_update_equals_the_kalman_filter(void **state) {
+    (void)state;
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 14);
+    const int n = 21, tracks = 6;
+    random_spd(&rng, n, g_P);
+    memcpy(g_P2, g_P, sizeof g_P);
+    assert_int_equal(sfd_msckf_stack_reset(&g_stack, n), SFD_OK);
+    static double H[BIG * D], r[BIG], R[BIG * BIG];
+    memset(R, 0, sizeof R);
+    int m = 0;
+    for (int t = 0; t < tracks; ++t) {
+        random_track(&rng, 6 + t, n, &g_track);
+        for (int i = 0; i < g_track.rows; ++i) g_track.r[i] = sfd_prng_gaussian(&rng);
+        assert_int_equal(sfd_msckf_track_project(&g_track), SFD_OK);
+        assert_int_equal(sfd_msckf_stack_fold(&g_stack, &g_track), SFD_OK);
+        for (int i = 0; i < g_track.rows; ++i) {
+            for (int j = 0; j < n; ++j) H[(m + i) * n + j] = g_track.Hx[i][j];
+            r[m + i] = g_track.r[i];
+            for (int j = 0; j < g_track.rows; ++j) R[(m + i) * BIG + m + j] = g_track.R[i][j];
+        }
+        m += g_track.rows;
+    }
+    assert_int_equal(g_stack.folded, m);
+    assert_true(m > n); /* more rows than states: the compression drops rows */
+    /* Reference Kalman update. */
+    static double PHt[D * BIG], S[BIG * BIG], Kt[BIG * D], HP[BIG * D];
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < m; ++j) {
+            double v = 0.0;
+            for (int l = 0; l < n; ++l) v += g_P2[i * D + l] * H[j * n + l];
+            PHt[i * m + j] = v;
+        }
+    }
+    for (int i = 0; i < m; ++i) {
+        for (int j = 0; j < m; ++j) {
+            double v = 0.0;
+            for (int l = 0; l < n; ++l) v += H[i * n + l] * PHt[l * m + j];
+            S[i * m + j] = v + R[i * BIG + j];
+        }
+        for (int j = 0; j < n; ++j) HP[i * n + j] = PHt[j * m + i];
+    }
+    assert_true(solve_dense(m, n, S, HP, Kt)); /* K^T = S^-1 H P */
+    double dx_ref[D];
+    for (int i = 0; i < n; ++i) {
+        dx_ref[i] = 0.0;
+        for (int j = 0; j < m; ++j) dx_ref[i] += Kt[j * n + i] * r[j];
+    }
+    double dx[D];
+    assert_int_equal(sfd_msckf_update(&g_stack, g_P, dx, &g_work), SFD_OK);
+    for (int i = 0; i < n; ++i)
+        assert_true(fabs(dx[i] - dx_ref[i]) < 1e-9 * (1.0 + fabs(dx_ref[i])));
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+            double kh = 0.0; /* (K H P)_ij = sum_l K_il (H P)_lj */
+            for (int l = 0; l < m; ++l) kh += Kt[l * n + i] * HP[l * n + j];
+            const double ref = g_P2[i * D + j] - kh;
+            assert_true(fabs(g_P[i * D + j] - ref) < 1e-9 * (1.0 + fabs(ref)));
+            assert_true(g_P[i * D + j] == g_P[j * D + i]);
+        }
+    }
+    /* An empty stack leaves P and gives dx = 0. */
+    memcpy(g_P2, g_P, sizeof g_P);
+    assert_int_equal(sfd_msckf_stack_reset(&g_stack, n), SFD_OK);
+    assert_int_equal(sfd_msckf_update(&g_stack, g_P, dx, &g_work), SFD_OK);
+    assert_memory_equal(g_P, g_P2, sizeof g_P);
+    for (int i = 0; i < n; ++i) assert_true(dx[i] == 0.0);
+}
+
+static void bad_sizes_and_degenerate_landmarks_are_status_codes(void **state) {
+    (void)state;
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 15);
+    random_track(&rng, 6, 10, &g_track);
+    g_copy = g_track;
+    g_track.rows = TR + 1; /* over capacity */
+    assert_int_equal(sfd_msckf_track_project(&g_track), SFD_ERR_INVAL);
+    g_track.rows = 3; /* fewer rows than the landmark's 3 dof: nothing left to test */
+    assert_int_equal(sfd_msckf_track_project(&g_track), SFD_ERR_INVAL);
+    g_track.rows = 6;
+    g_track.n = D + 1;
+    assert_int_equal(sfd_msckf_track_project(&g_track), SFD_ERR_INVAL);
+    g_track.n = 10;
+    assert_memory_equal(&g_track, &g_copy, sizeof g_track); /* nothing written */
+    g_track.r[2] = NAN;
+    assert_int_equal(sfd_msckf_track_project(&g_track), SFD_ERR_INVAL);
+    g_track.r[2] = 0.0;
+    assert_int_equal(sfd_msckf_track_project(NULL), SFD_ERR_INVAL);
+    double gamma = 0.0;
+    int32_t dof = 0;
+    random_spd(&rng, 10, g_P);
+    assert_int_equal(sfd_msckf_track_gate(&g_track, g_P, &gamma, &dof), SFD_ERR_INVAL);
+    assert_int_equal(sfd_msckf_stack_reset(&g_stack, 10), SFD_OK);
+    assert_int_equal(sfd_msckf_stack_fold(&g_stack, &g_track), SFD_ERR_INVAL); /* unprojected */
+    /* Rank 2 (no parallax: every row's landmark direction in one plane). */
+    for (int i = 0; i < 6; ++i) g_track.Hf[i][2] = 2.0 * g_track.Hf[i][0] - g_track.Hf[i][1];
+    assert_int_equal(sfd_msckf_track_project(&g_track), SFD_ERR_NUMERIC);
+    assert_int_equal(g_track.projected, 0);
+    /* Fold into a stack of another dimension. */
+    random_track(&rng, 6, 10, &g_track);
+    assert_int_equal(sfd_msckf_track_project(&g_track), SFD_OK);
+    assert_int_equal(sfd_msckf_stack_reset(&g_stack, 12), SFD_OK);
+    assert_int_equal(sfd_msckf_stack_fold(&g_stack, &g_track), SFD_ERR_INVAL);
+    assert_int_equal(sfd_msckf_stack_reset(&g_stack, D + 1), SFD_ERR_INVAL);
+    /* A non-positive-definite projected noise is refused and leaves the stack as it was. */
+    assert_int_equal(sfd_msckf_stack_reset(&g_stack, 10), SFD_OK);
+    g_track.R[0][0] = -1.0;
+    assert_int_equal(sfd_msckf_stack_fold(&g_stack, &g_track), SFD_ERR_NUMERIC);
+    assert_int_equal(g_stack.folded, 0);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(projected_residual_is_orthogonal_to_the_landmark_jacobian),
+        cmocka_unit_test(gate_equals_the_landmark_eliminated_statistic),
+        cmocka_unit_test(gate_is_chi_square_for_consistent_tracks_whatever_the_landmark_error),
+        cmocka_unit_test(compressed_update_equals_the_kalman_filter),
+        cmocka_unit_test(bad_sizes_and_degenerate_landmarks_are_status_codes),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
