@@ -370,6 +370,30 @@ bool make_dirs(const char *path) {
 
 int main(int argc, char **argv) {
     Options opt;
+    // Options taking one number in a range: flag, bounds, destination.
+    struct RangeFlag {
+        const char *flag;
+        double lo, hi;
+        double *dst;
+    };
+    const RangeFlag range_flags[] = {{"--camera-hz", 0.1, 200.0, &opt.camera_hz},
+                                     {"--spurious-fraction", 0.0, 0.9, &opt.spurious_fraction},
+                                     {"--pixel-sigma", 0.0, 100.0, &opt.pixel_sigma},
+                                     {"--track-loss", 0.0, 1.0, &opt.track_loss},
+                                     {"--mover-speed", 0.0, 100.0, &opt.mover_speed},
+                                     {"--random-fraction", 0.0, 1.0, &opt.random_fraction},
+                                     {"--rest-s", 0.0, 3600.0, &opt.rest_s},
+                                     {"--ramp-s", 0.1, 600.0, &opt.ramp_s},
+                                     {"--gyro-noise", 0.0, 1.0, &opt.gyro_noise},
+                                     {"--accel-noise", 0.0, 10.0, &opt.accel_noise},
+                                     {"--gyro-bias-rw", 0.0, 1.0, &opt.gyro_bias_rw},
+                                     {"--accel-bias-rw", 0.0, 10.0, &opt.accel_bias_rw}};
+    auto find_range_flag = [&range_flags](const char *flag) -> const RangeFlag * {
+        for (const RangeFlag &r : range_flags) {
+            if (!std::strcmp(flag, r.flag)) return &r;
+        }
+        return nullptr;
+    };
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         long v = 0;
@@ -466,56 +490,15 @@ int main(int argc, char **argv) {
             opt.euroc_dir = argv[++i];
         } else if (!std::strcmp(a, "--config-out") && i + 1 < argc) {
             opt.config_out = argv[++i];
-        } else if ((!std::strcmp(a, "--camera-hz") || !std::strcmp(a, "--spurious-fraction") ||
-                    !std::strcmp(a, "--pixel-sigma") || !std::strcmp(a, "--track-loss") ||
-                    !std::strcmp(a, "--mover-speed") || !std::strcmp(a, "--random-fraction")) &&
-                   i + 1 < argc) {
+        } else if (const RangeFlag *rf = find_range_flag(a); rf != nullptr && i + 1 < argc) {
             char *end = nullptr;
             const double x = std::strtod(argv[++i], &end);
-            struct Range {
-                const char *flag;
-                double lo, hi;
-                double *dst;
-            } ranges[] = {{"--camera-hz", 0.1, 200.0, &opt.camera_hz},
-                          {"--spurious-fraction", 0.0, 0.9, &opt.spurious_fraction},
-                          {"--pixel-sigma", 0.0, 100.0, &opt.pixel_sigma},
-                          {"--track-loss", 0.0, 1.0, &opt.track_loss},
-                          {"--mover-speed", 0.0, 100.0, &opt.mover_speed},
-                          {"--random-fraction", 0.0, 1.0, &opt.random_fraction}};
-            for (const Range &r : ranges) {
-                if (std::strcmp(a, r.flag) != 0) continue;
-                if (*end != '\0' || !(x >= r.lo && x <= r.hi)) {
-                    std::fprintf(stderr, "sfd-sim: %s: expected %g..%g, got %s\n", a, r.lo, r.hi,
-                                 argv[i]);
-                    return 2;
-                }
-                *r.dst = x;
+            if (*end != '\0' || !(x >= rf->lo && x <= rf->hi)) {
+                std::fprintf(stderr, "sfd-sim: %s: expected %g..%g, got %s\n", a, rf->lo, rf->hi,
+                             argv[i]);
+                return 2;
             }
-        } else if ((!std::strcmp(a, "--rest-s") || !std::strcmp(a, "--ramp-s") ||
-                    !std::strcmp(a, "--gyro-noise") || !std::strcmp(a, "--accel-noise") ||
-                    !std::strcmp(a, "--gyro-bias-rw") || !std::strcmp(a, "--accel-bias-rw")) &&
-                   i + 1 < argc) {
-            char *end = nullptr;
-            const double x = std::strtod(argv[++i], &end);
-            struct Range {
-                const char *flag;
-                double lo, hi;
-                double *dst;
-            } ranges[] = {{"--rest-s", 0.0, 3600.0, &opt.rest_s},
-                          {"--ramp-s", 0.1, 600.0, &opt.ramp_s},
-                          {"--gyro-noise", 0.0, 1.0, &opt.gyro_noise},
-                          {"--accel-noise", 0.0, 10.0, &opt.accel_noise},
-                          {"--gyro-bias-rw", 0.0, 1.0, &opt.gyro_bias_rw},
-                          {"--accel-bias-rw", 0.0, 10.0, &opt.accel_bias_rw}};
-            for (const Range &r : ranges) {
-                if (std::strcmp(a, r.flag) != 0) continue;
-                if (*end != '\0' || !(x >= r.lo && x <= r.hi)) {
-                    std::fprintf(stderr, "sfd-sim: %s: expected %g..%g, got %s\n", a, r.lo, r.hi,
-                                 argv[i]);
-                    return 2;
-                }
-                *r.dst = x;
-            }
+            *rf->dst = x;
         } else if ((!std::strcmp(a, "--gyro-bias") || !std::strcmp(a, "--accel-bias")) &&
                    i + 1 < argc) {
             const bool gyro = !std::strcmp(a, "--gyro-bias");
