@@ -6,6 +6,8 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "sfd/sfd_rotation.h"
+
 namespace sfdeval {
 
 double percentile_sorted(const std::vector<double> &ascending, double q) {
@@ -129,21 +131,13 @@ void PosYaw::apply(const double x[3], double out[3]) const {
 
 namespace {
 
-// Rotation matrix (row-major) of a unit quaternion (w, x, y, z); normalised first.
+// Rotation matrix (row-major) of a quaternion (w, x, y, z), normalised first by the core's
+// rotation module; the identity for a quaternion that cannot be normalised (zero, non-finite).
 void rotation_of(const double q_in[4], double R[9]) {
-    double n = 0.0;
-    for (int k = 0; k < 4; ++k) n += q_in[k] * q_in[k];
-    n = n > 0.0 ? std::sqrt(n) : 1.0;
-    const double w = q_in[0] / n, x = q_in[1] / n, y = q_in[2] / n, z = q_in[3] / n;
-    R[0] = 1 - 2 * (y * y + z * z);
-    R[1] = 2 * (x * y - w * z);
-    R[2] = 2 * (x * z + w * y);
-    R[3] = 2 * (x * y + w * z);
-    R[4] = 1 - 2 * (x * x + z * z);
-    R[5] = 2 * (y * z - w * x);
-    R[6] = 2 * (x * z - w * y);
-    R[7] = 2 * (y * z + w * x);
-    R[8] = 1 - 2 * (x * x + y * y);
+    double q[4] = {q_in[0], q_in[1], q_in[2], q_in[3]};
+    if (sfd_quat_normalize(q) != SFD_OK || sfd_quat_to_rotmat(q, R) != SFD_OK) {
+        for (int k = 0; k < 9; ++k) R[k] = (k % 4 == 0) ? 1.0 : 0.0;
+    }
 }
 
 double norm3(const double a[3]) {

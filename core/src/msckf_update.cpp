@@ -270,7 +270,7 @@ extern "C" sfd_status_t sfd_msckf_update(const sfd_msckf_stack_t *s, double *P, 
             w->S[i][j] = v;
         }
     }
-    for (int i = 0; i < n; ++i) {  // into w->A: the new P (H is no longer needed)
+    for (int i = 0; i < n; ++i) {  // into w->A: the updated P (H is no longer needed)
         for (int j = 0; j <= i; ++j) {
             double v = 0.0;
             for (int l = 0; l < n; ++l) v += w->S[i][l] * w->B[j][l];

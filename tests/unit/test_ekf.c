@@ -4,6 +4,7 @@
  * numerical differentiation, it is consistent (NEES over Monte Carlo runs inside the chi-square
  * bounds), and it refuses bad input without changing. */
 #include "sfd_test.h"
+#include "test_dense.h"
 
 #include <string.h>
 
@@ -12,42 +13,6 @@
 #include <sfd/sfd_rotation.h>
 
 enum { NX = SFD_EKF_DIM };
-
-/* ---- small dense helpers of the test (independent of the core's) ---- */
-
-/* X = A^-1 B for an n x n A (row-major, stride n) and n x m B, Gauss-Jordan, partial pivoting. */
-static int solve_dense(int n, int m, const double *A_in, const double *B_in, double *X) {
-    double A[30 * 30], B[30 * 30];
-    memcpy(A, A_in, sizeof(double) * (size_t)(n * n));
-    memcpy(B, B_in, sizeof(double) * (size_t)(n * m));
-    for (int c = 0; c < n; ++c) {
-        int piv = c;
-        for (int r = c + 1; r < n; ++r) {
-            if (fabs(A[r * n + c]) > fabs(A[piv * n + c])) piv = r;
-        }
-        if (fabs(A[piv * n + c]) < 1e-300) return 0;
-        for (int k = 0; k < n; ++k) {
-            double t = A[c * n + k];
-            A[c * n + k] = A[piv * n + k];
-            A[piv * n + k] = t;
-        }
-        for (int k = 0; k < m; ++k) {
-            double t = B[c * m + k];
-            B[c * m + k] = B[piv * m + k];
-            B[piv * m + k] = t;
-        }
-        for (int r = 0; r < n; ++r) {
-            if (r == c) continue;
-            const double f = A[r * n + c] / A[c * n + c];
-            for (int k = 0; k < n; ++k) A[r * n + k] -= f * A[c * n + k];
-            for (int k = 0; k < m; ++k) B[r * m + k] -= f * B[c * m + k];
-        }
-    }
-    for (int r = 0; r < n; ++r) {
-        for (int k = 0; k < m; ++k) X[r * m + k] = B[r * m + k] / A[r * n + r];
-    }
-    return 1;
-}
 
 /* C = A B with A (n x k), B (k x m). */
 static void matmul(int n, int k, int m, const double *A, const double *B, double *C) {
@@ -69,7 +34,7 @@ static void transpose(int n, int m, const double *A, double *At) {
 /* Quadratic form e^T P^-1 e. */
 static double mahalanobis(int n, const double *P, const double *e) {
     double x[NX] = {0};
-    assert_true(solve_dense(n, 1, P, e, x));
+    assert_true(test_solve_dense(n, 1, P, e, x));
     double s = 0.0;
     for (int i = 0; i < n; ++i) s += e[i] * x[i];
     return s;
@@ -191,7 +156,7 @@ static void ekf_linear_case_equals_kalman_filter(void **state) {
             }
             double PCt_T[18];
             transpose(6, 3, PCt, PCt_T);
-            assert_true(solve_dense(3, 6, S, PCt_T, Kt)); /* S^-1 (P C^T)^T = K^T */
+            assert_true(test_solve_dense(3, 6, S, PCt_T, Kt)); /* S^-1 (P C^T)^T = K^T */
             transpose(3, 6, Kt, K);
             double innov[3];
             for (int k = 0; k < 3; ++k) innov[k] = z[k] - x[k];
@@ -351,7 +316,7 @@ static void textbook_system(const sfd_ekf_t *ekf, const sfd_ekf_camera_t *cam,
     matmul(2 * M, NX, 2 * M, H, PHt, S);
     for (int i = 0; i < 4 * M * M; ++i) S[i] += R[i];
     transpose(NX, 2 * M, PHt, PHt_T);
-    assert_true(solve_dense(2 * M, NX, S, PHt_T, Kt));
+    assert_true(test_solve_dense(2 * M, NX, S, PHt_T, Kt));
     transpose(2 * M, NX, Kt, K);
 }
 
@@ -377,7 +342,7 @@ static void ekf_camera_update_equals_textbook_equations(void **state) {
     for (int i = 0; i < NX * NX; ++i) IKH[i] = ((i % (NX + 1)) == 0 ? 1.0 : 0.0) - KH[i];
     matmul(NX, NX, NX, IKH, ekf.P, Pref);
     double nis_ref = 0.0, Sinv_nu[2 * M] = {0};
-    assert_true(solve_dense(2 * M, 1, S, nu, Sinv_nu));
+    assert_true(test_solve_dense(2 * M, 1, S, nu, Sinv_nu));
     for (int i = 0; i < 2 * M; ++i) nis_ref += nu[i] * Sinv_nu[i];
 
     sfd_ekf_t before = ekf;

@@ -7,6 +7,7 @@
  * equals the textbook Kalman update with every projected row; bad sizes and rank-deficient
  * landmarks are status codes. */
 #include "sfd_test.h"
+#include "test_dense.h"
 
 #include <string.h>
 
@@ -15,49 +16,14 @@
 #include <sfd/sfd_prng.h>
 
 enum { D = SFD_MSCKF_DIM, TR = SFD_MSCKF_TRACK_ROWS, BIG = 6 * TR };
+_Static_assert(BIG <= TEST_DENSE_MAX && D <= TEST_DENSE_MAX, "test_dense.h's capacity");
 
 static sfd_msckf_track_t g_track, g_copy;
 static sfd_msckf_stack_t g_stack;
 static sfd_msckf_work_t g_work;
 static double g_P[D * D], g_P2[D * D];
 
-/* ---- dense helpers of the test (independent of the core's) ---- */
-
-/* X = A^-1 B, n x n A (stride n), n x m B (stride m), Gauss-Jordan with partial pivoting. */
-static int solve_dense(int n, int m, const double *A_in, const double *B_in, double *X) {
-    static double A[BIG * BIG], B[BIG * D];
-    memcpy(A, A_in, sizeof(double) * (size_t)(n * n));
-    memcpy(B, B_in, sizeof(double) * (size_t)(n * m));
-    for (int c = 0; c < n; ++c) {
-        int piv = c;
-        for (int r = c + 1; r < n; ++r) {
-            if (fabs(A[r * n + c]) > fabs(A[piv * n + c])) piv = r;
-        }
-        if (fabs(A[piv * n + c]) < 1e-300) return 0;
-        for (int k = 0; k < n; ++k) {
-            const double t = A[c * n + k];
-            A[c * n + k] = A[piv * n + k];
-            A[piv * n + k] = t;
-        }
-        for (int k = 0; k < m; ++k) {
-            const double t = B[c * m + k];
-            B[c * m + k] = B[piv * m + k];
-            B[piv * m + k] = t;
-        }
-        const double d = A[c * n + c];
-        for (int k = 0; k < n; ++k) A[c * n + k] /= d;
-        for (int k = 0; k < m; ++k) B[c * m + k] /= d;
-        for (int r = 0; r < n; ++r) {
-            if (r == c) continue;
-            const double f = A[r * n + c];
-            if (f == 0.0) continue;
-            for (int k = 0; k < n; ++k) A[r * n + k] -= f * A[c * n + k];
-            for (int k = 0; k < m; ++k) B[r * m + k] -= f * B[c * m + k];
-        }
-    }
-    memcpy(X, B, sizeof(double) * (size_t)(n * m));
-    return 1;
-}
+/* ---- helpers of the test ---- */
 
 /* A random SPD n x n matrix into P (stride D): M M^T / n + 0.1 I, entries O(1). */
 static void random_spd(sfd_prng_t *rng, int n, double *P) {
@@ -162,7 +128,7 @@ static void gate_equals_the_landmark_eliminated_statistic(void **state) {
             for (int j = 0; j < 3; ++j) rhs[i * 4 + 1 + j] = g_track.Hf[i][j];
         }
         double X[TR * 4] = {0};
-        assert_true(solve_dense(rows, 4, S, rhs, X));
+        assert_true(test_solve_dense(rows, 4, S, rhs, X));
         for (int i = 0; i < rows; ++i) {
             SiR[i] = X[i * 4 + 0];
             for (int j = 0; j < 3; ++j) SiF[i * 3 + j] = X[i * 4 + 1 + j];
@@ -176,7 +142,7 @@ static void gate_equals_the_landmark_eliminated_statistic(void **state) {
             }
         }
         double y[3] = {0.0, 0.0, 0.0};
-        assert_true(solve_dense(3, 1, FtSiF, FtSiR, y));
+        assert_true(test_solve_dense(3, 1, FtSiF, FtSiR, y));
         const double ref = rSiR - (FtSiR[0] * y[0] + FtSiR[1] * y[1] + FtSiR[2] * y[2]);
         assert_int_equal(sfd_msckf_track_project(&g_track), SFD_OK);
         double gamma = -1.0;
@@ -294,7 +260,7 @@ static void compressed_update_equals_the_kalman_filter(void **state) {
         }
         for (int j = 0; j < n; ++j) HP[i * n + j] = PHt[j * m + i];
     }
-    assert_true(solve_dense(m, n, S, HP, Kt)); /* K^T = S^-1 H P */
+    assert_true(test_solve_dense(m, n, S, HP, Kt)); /* K^T = S^-1 H P */
     double dx_ref[D];
     for (int i = 0; i < n; ++i) {
         dx_ref[i] = 0.0;
