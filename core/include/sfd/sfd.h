@@ -26,6 +26,7 @@
 #include "sfd_ekf.h"
 #include "sfd_msckf.h"
 #include "sfd_rest.h"
+#include "sfd_window.h"
 #include "sfd_prng.h"
 #include "sfd_ransac.h"
 #include "sfd_rotation.h"

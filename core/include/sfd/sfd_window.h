@@ -1,0 +1,225 @@
+/* SPDX-License-Identifier: MIT */
+/**
+ * @file sfd_window.h
+ * @brief The sliding-window navigation filter (multi-state constraint Kalman filter, Mourikis &
+ *        Roumeliotis 2007; core/docs/window_filter.md): the IMU state plus a fixed window of
+ *        cloned IMU poses, propagated with every IMU sample, updated from feature tracks whose
+ *        residuals are projected onto the left null space of their landmark Jacobian and
+ *        chi-square gated (sfd_msckf.h) before they reach the update.
+ *
+ * Nominal state: position p_IinW (m), velocity v_IinW (m/s), orientation R_ItoW (quaternion w, x,
+ * y, z), gyro bias bg (rad/s), accelerometer bias ba (m/s^2); then L clones (p_IinW, R_ItoW), the
+ * IMU pose at each of the last L frames, oldest first. World frame: z up, gravity (0, 0, -g).
+ *
+ * Error state (15 + 6 L, order SFD_WINDOW_IDX_*, clone i at 15 + 6 i: dp, dtheta):
+ *   p = p^ + dp, v = v^ + dv, R = Exp(dtheta) R^ (dtheta in the WORLD frame, "global", unlike the
+ *   local error of sfd_ekf.h: it makes the unobservable yaw direction the same vector for every
+ *   pose, which first-estimate Jacobians rely on), bg = bg^ + dbg, ba = ba^ + dba.
+ *
+ * Consistency: first-estimate Jacobians (Li & Mourikis 2013). The IMU transition is evaluated at
+ * the position and velocity the state had before the last update, each clone's measurement
+ * Jacobian at the pose it was cloned with; so the filter's linearized system keeps the four
+ * unobservable directions (global position, yaw about gravity) unobservable and the filter does
+ * not gain false confidence in them. Residuals are evaluated at the current estimate.
+ *
+ * Per frame (sfd_window_frame): clone the current IMU pose into the window; add the frame's
+ * observations (normalized undistorted coordinates, their 2x2 covariance from the pixel noise
+ * through the distortion Jacobian, the wire's depth prior); drop the tracks the caller flags;
+ * use every track that ended (not seen in this frame) or that reaches the oldest clone of a full
+ * window: triangulate it over the clones (bounded Gauss-Newton), project, gate with
+ * chi2(rows - 3, 1 - alpha), fold the accepted ones; one update; then marginalize the oldest
+ * clone when the window is full. A used or gated track's observations are deleted (each
+ * observation informs the filter at most once; a gated one never).
+ *
+ * Capacities: SFD_MAX_WINDOW clones, SFD_WINDOW_MAX_TRACKS tracks of up to SFD_MAX_WINDOW
+ * observations. Overflow is counted and the observation ignored, never written past an array.
+ * No heap, no global state, no recursion; every loop has a fixed bound. The filter is large
+ * (sizeof(sfd_window_t), ~0.17 MiB at the defaults): declare it static or inside a static owner.
+ */
+#ifndef SFD_WINDOW_H
+#define SFD_WINDOW_H
+#include <stdint.h>
+#include "sfd_config.h"
+#include "sfd_ekf.h"
+#include "sfd_msckf.h"
+#include "sfd_rotation.h"
+#include "sfd_status.h"
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Tracks the filter holds at once (one per feature of a frame). */
+#define SFD_WINDOW_MAX_TRACKS SFD_MAX_FEATURES
+/** Slots of the track-id index (load factor <= 1/2). */
+#define SFD_WINDOW_INDEX_SLOTS (2 * SFD_WINDOW_MAX_TRACKS + 1)
+/** Offsets of the IMU error-state blocks. */
+#define SFD_WINDOW_IDX_P 0
+#define SFD_WINDOW_IDX_V 3
+#define SFD_WINDOW_IDX_THETA 6
+#define SFD_WINDOW_IDX_BG 9
+#define SFD_WINDOW_IDX_BA 12
+/** Error-state dimension of the IMU part; clone i starts at SFD_WINDOW_IMU_DIM + 6 i. */
+#define SFD_WINDOW_IMU_DIM 15
+
+typedef struct {
+    sfd_ekf_noise_t noise;              /**< IMU noise densities, gravity and largest step */
+    double p0_diag[SFD_WINDOW_IMU_DIM]; /**< initial variances, SFD_WINDOW_IDX_* order (dtheta
+                                             global: yaw is theta z) */
+    int32_t window;                     /**< L: clones held, 2..SFD_MAX_WINDOW (5) */
+    int32_t min_observations; /**< a track is used with at least this many clones, 2..L (3) */
+    double gate_alpha;        /**< false-alarm rate of a consistent track's gate, (0, 0.5] (0.01) */
+    double min_depth_m;       /**< a triangulated point closer to any clone is refused (0.1) */
+    double max_depth_m;       /**< or farther (1e4) */
+    int32_t use_depth_prior;  /**< 1: the first observation's depth prior is a measurement (1) */
+    double depth_var_floor_m2;       /**< added to the wire's depth variance (1e-4) */
+    int32_t gauss_newton_iterations; /**< triangulation steps, 1..20 (5) */
+    int32_t first_estimates; /**< 1: first-estimate Jacobians (1); 0: the plain EKF Jacobians at
+                                  the current estimate (for comparison; over-confident) */
+} sfd_window_params_t;
+
+/** One observation handed to sfd_window_frame(). */
+typedef struct {
+    int64_t track_id;
+    double xn[2];        /**< normalized undistorted coordinates (x/z, y/z) */
+    double cov_xn[3];    /**< their covariance: xx, xy, yy (from the pixel noise through the
+                              distortion Jacobian), positive definite */
+    double depth_m;      /**< depth prior along the optical axis (m); <= 0: none */
+    double depth_var_m2; /**< its variance (m^2), >= 0 */
+    int32_t drop;        /**< 1: the caller judged this observation spurious: the track's
+                              observations are deleted, this one is not added */
+} sfd_window_obs_t;
+
+/** What one frame did (sfd_window_frame). */
+typedef struct {
+    int32_t added;       /**< observations added to tracks */
+    int32_t dropped;     /**< tracks deleted because the caller flagged them */
+    int32_t overflow;    /**< observations ignored: track table full, duplicate id, bad values */
+    int32_t candidates;  /**< tracks that ended or reached the oldest clone */
+    int32_t too_short;   /**< of those, fewer than min_observations: deleted unused */
+    int32_t no_geometry; /**< not triangulable (no parallax, behind a camera): deleted unused */
+    int32_t gated;       /**< failed the chi-square gate: deleted, never used */
+    int32_t used;        /**< passed and folded into the update */
+    int32_t rows;        /**< projected rows folded */
+    double nis;          /**< sum of the used tracks' gate statistics (chi2(rows)) */
+    sfd_status_t update_status; /**< of the Kalman update (SFD_OK when nothing to update) */
+    int32_t num_gated_ids;      /**< entries of gated_ids */
+    int64_t gated_ids[SFD_WINDOW_MAX_TRACKS]; /**< the tracks the gate refused in this frame */
+} sfd_window_result_t;
+
+typedef struct {
+    int32_t used;         /**< observations held (consecutive clones from first_clone) */
+    uint32_t first_clone; /**< sequence number of the clone of observation 0 */
+    int32_t seen;         /**< 1: observed in the newest frame */
+    int64_t id;
+    double xn[SFD_MAX_WINDOW][2];
+    double cov_xn[SFD_MAX_WINDOW][3];
+    double depth_m; /**< depth prior of observation 0, <= 0: none */
+    double depth_var_m2;
+} sfd_window_track_t;
+
+typedef struct {
+    double p_IinW_m[3];
+    double q_ItoW[4];
+    double fe_p_IinW_m[3]; /**< first estimate: the pose at cloning (Jacobians) */
+    double fe_R_ItoW[9];
+    int64_t utime;
+    uint32_t seq; /**< sequence number (consecutive over the window) */
+} sfd_window_clone_t;
+
+/** The filter (caller-owned). */
+typedef struct {
+    sfd_window_params_t prm;
+    int32_t started;
+    int64_t utime; /**< time the IMU state refers to (us) */
+    double p_IinW_m[3];
+    double v_IinW_m_s[3];
+    double q_ItoW[4];
+    double bg_rad_s[3];
+    double ba_m_s2[3];
+    /* first estimates of the IMU state for the next transition (before the last update) */
+    double fe_p_IinW_m[3];
+    double fe_v_IinW_m_s[3];
+    /* transition and noise accumulated since the covariance was last brought up to date */
+    int32_t pending;
+    double Phi[SFD_WINDOW_IMU_DIM][SFD_WINDOW_IMU_DIM];
+    double Qd[SFD_WINDOW_IMU_DIM][SFD_WINDOW_IMU_DIM];
+    int32_t num_clones;
+    uint32_t next_seq;
+    sfd_window_clone_t clones[SFD_MAX_WINDOW];
+    double P[SFD_MSCKF_DIM][SFD_MSCKF_DIM]; /**< covariance of the error state, SPD */
+    double gate[SFD_MSCKF_TRACK_ROWS];      /**< chi2(k, 1 - alpha) for k rows */
+    int32_t num_tracks;
+    sfd_window_track_t tracks[SFD_WINDOW_MAX_TRACKS];
+    int16_t index[SFD_WINDOW_INDEX_SLOTS]; /**< track id -> tracks[] entry, -1 empty */
+    uint32_t numeric_faults;               /**< updates or propagations refused */
+    /* scratch of one frame (no content kept between calls) */
+    sfd_msckf_track_t scratch_track;
+    sfd_msckf_stack_t scratch_stack;
+    sfd_msckf_work_t scratch_work;
+    double scratch_dx[SFD_MSCKF_DIM];
+} sfd_window_t;
+
+/** @brief The defaults in parentheses above; noise sfd_ekf_noise_default(); P0 position 1e-6 m^2,
+ *         velocity 1e-4 m^2/s^2, roll and pitch 1e-4 rad^2, yaw 1e-6 rad^2, gyro bias 1e-6
+ *         (rad/s)^2 (estimated at rest), accelerometer bias 4e-3 (m/s^2)^2 (a prior). */
+sfd_status_t sfd_window_params_default(sfd_window_params_t *params);
+
+/** @brief Validates the parameters and empties the filter (not started).
+ *  @return SFD_OK; SFD_ERR_INVAL for null or a value out of range (filter unchanged). */
+sfd_status_t sfd_window_init(sfd_window_t *w, const sfd_window_params_t *params);
+
+/**
+ * @brief Starts at rest (WINDOW_FILTER.md "Consistency and start"): position 0, velocity 0,
+ *        yaw 0, roll and pitch from the mean specific force (which points up at rest), gyro bias
+ *        the mean gyro at rest, accelerometer bias 0 with its prior variance; no clone.
+ * @return SFD_OK; SFD_ERR_INVAL for null or non-finite input; SFD_ERR_DOMAIN when |accel| is
+ *         not within 30 % of gravity.
+ */
+sfd_status_t sfd_window_start_at_rest(sfd_window_t *w, int64_t utime, const double accel_m_s2[3],
+                                      const double gyro_bias_rad_s[3]);
+
+/** @brief Starts at a given state (evaluation: from TRUTH), with the P0 of the parameters.
+ *  @return SFD_OK; SFD_ERR_INVAL for null, non-finite input or a quaternion not of unit norm
+ *          within 1e-6. */
+sfd_status_t sfd_window_start_at(sfd_window_t *w, int64_t utime, const double p_m[3],
+                                 const double v_m_s[3], const double q_ItoW[4],
+                                 const double bg_rad_s[3], const double ba_m_s2[3]);
+
+/**
+ * @brief Propagates the IMU state by one interval dt with gyro and accel held (zero-order hold):
+ *        R' = R Exp(w dt), v' = v + (R a + g) dt, p' = p + v dt + (R a + g) dt^2 / 2 with
+ *        w = gyro - bg, a = accel - ba. The transition Phi (first-estimate form, eq. (5) of
+ *        core/docs/window_filter.md) and the discrete noise accumulate; the covariance is brought
+ *        up to date when the next frame or a reader needs it.
+ * @return SFD_OK; SFD_ERR_STATE when not started; SFD_ERR_INVAL for null, non-finite values or
+ *         dt outside (0, max_dt_s] (nothing changed); SFD_ERR_NUMERIC when the result is not
+ *         finite (nothing changed; counted).
+ */
+sfd_status_t sfd_window_propagate(sfd_window_t *w, const double gyro_rad_s[3],
+                                  const double accel_m_s2[3], double dt_s);
+
+/**
+ * @brief One frame at the filter's current time (propagate to the frame's time first): clone,
+ *        observations, the updates of the tracks that are due, marginalization (file comment).
+ * @param obs n observations (n <= SFD_WINDOW_MAX_TRACKS; bad ones counted in overflow).
+ * @param ext the camera's pose in the IMU frame.
+ * @param result required.
+ * @return SFD_OK (also when nothing was updated; see result->update_status); SFD_ERR_STATE when
+ *         not started; SFD_ERR_INVAL for null or n out of range (nothing changed).
+ */
+sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime, const sfd_window_obs_t *obs,
+                              int32_t n, const sfd_extrinsics_t *ext, sfd_window_result_t *result);
+
+/** @brief The IMU state's orientation error covariance in the LOCAL convention of sfd_ekf.h and
+ *         the whole IMU state as an sfd_ekf_t (for the association methods' hypotheses, which
+ *         work on it): dtheta_local = R^T dtheta_global, other blocks as they are.
+ *  @return SFD_OK; SFD_ERR_STATE when not started; SFD_ERR_INVAL for null. */
+sfd_status_t sfd_window_to_ekf(sfd_window_t *w, sfd_ekf_t *ekf);
+
+/** @brief Position variance (m^2, x y z) of the IMU state. SFD_ERR_STATE when not started. */
+sfd_status_t sfd_window_position_var(sfd_window_t *w, double var_m2[3]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* SFD_WINDOW_H */

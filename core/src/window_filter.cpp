@@ -1,0 +1,757 @@
+// SPDX-License-Identifier: MIT
+// The sliding-window navigation filter (sfd_window.h, core/docs/window_filter.md): IMU
+// propagation with first-estimate Jacobians, cloning, track bookkeeping, triangulation over the
+// window, the gated null-space update (msckf_update.cpp) and marginalization of the oldest clone.
+#include "core_private.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "rotation.hpp"
+#include "sfd/sfd_chi2.h"
+#include "sfd/sfd_window.h"
+
+namespace sfd {
+namespace {
+
+constexpr int kImu = SFD_WINDOW_IMU_DIM;
+constexpr int kDim = SFD_MSCKF_DIM;
+constexpr int P_ = SFD_WINDOW_IDX_P, V_ = SFD_WINDOW_IDX_V, TH = SFD_WINDOW_IDX_THETA,
+              BG = SFD_WINDOW_IDX_BG, BA = SFD_WINDOW_IDX_BA;
+
+using Mat15 = Eigen::Matrix<double, kImu, kImu, Eigen::RowMajor>;
+using Map15 = Eigen::Map<Mat15>;
+
+/// A B for 15x15 operands, coefficient-based: Eigen's blocked GEMM kernel would otherwise be
+/// chosen, whose blocking buffers are heap- or alloca-backed (proof.core_symbols and
+/// proof.stack_usage pin that it never is).
+template <typename A, typename B>
+Mat15 mul15(const A &a, const B &b) {
+    Mat15 c = a.lazyProduct(b);
+    return c;
+}
+
+Vec3 v3(const double *p) {
+    return Vec3(p[0], p[1], p[2]);
+}
+
+Mat3 quat_rot(const double q[4]) {
+    return Quat(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+}
+
+void store_quat(const Mat3 &R, double q[4]) {
+    const Quat qq = rotmat_to_quat(R);
+    q[0] = qq.w();
+    q[1] = qq.x();
+    q[2] = qq.y();
+    q[3] = qq.z();
+}
+
+int dim(const sfd_window_t &w) {
+    return kImu + 6 * w.num_clones;
+}
+
+bool params_valid(const sfd_window_params_t &p) {
+    const sfd_ekf_noise_t &n = p.noise;
+    const double nz[6] = {
+        n.gyro_noise_rad_s_rthz,   n.accel_noise_m_s2_rthz, n.gyro_bias_rw_rad_s2_rthz,
+        n.accel_bias_rw_m_s3_rthz, n.gravity_m_s2,          n.max_dt_s};
+    for (double v : nz) {
+        if (!(v >= 0.0) || !std::isfinite(v)) return false;
+    }
+    if (!(n.gravity_m_s2 > 0.0) || !(n.max_dt_s > 0.0)) return false;
+    for (double v : p.p0_diag) {
+        if (!(v >= 0.0) || !std::isfinite(v)) return false;
+    }
+    return p.window >= 2 && p.window <= SFD_MAX_WINDOW && p.min_observations >= 2 &&
+           p.min_observations <= p.window && p.gate_alpha > 0.0 && p.gate_alpha <= 0.5 &&
+           p.min_depth_m > 0.0 && p.max_depth_m > p.min_depth_m && std::isfinite(p.max_depth_m) &&
+           (p.use_depth_prior == 0 || p.use_depth_prior == 1) && p.depth_var_floor_m2 > 0.0 &&
+           std::isfinite(p.depth_var_floor_m2) && p.gauss_newton_iterations >= 1 &&
+           p.gauss_newton_iterations <= 20 && (p.first_estimates == 0 || p.first_estimates == 1);
+}
+
+/// Resets the accumulated transition to the identity and its noise to zero.
+void reset_pending(sfd_window_t *w) {
+    for (int i = 0; i < kImu; ++i) {
+        for (int j = 0; j < kImu; ++j) {
+            w->Phi[i][j] = (i == j) ? 1.0 : 0.0;
+            w->Qd[i][j] = 0.0;
+        }
+    }
+    w->pending = 0;
+}
+
+/// Brings P up to date with the accumulated transition: P_II <- Phi P_II Phi^T + Qd, P_IC <- Phi
+/// P_IC (the clones do not move between frames).
+void flush(sfd_window_t *w) {
+    if (!w->pending) return;
+    const int n = dim(*w);
+    const Map15 Phi(&w->Phi[0][0]);
+    Mat15 PII;
+    for (int i = 0; i < kImu; ++i) {
+        for (int j = 0; j < kImu; ++j) PII(i, j) = w->P[i][j];
+    }
+    const Mat15 PIIn = mul15(mul15(Phi, PII), Phi.transpose()) + Map15(&w->Qd[0][0]);
+    for (int i = 0; i < kImu; ++i) {
+        for (int j = 0; j < kImu; ++j) w->P[i][j] = 0.5 * (PIIn(i, j) + PIIn(j, i));
+    }
+    for (int c = kImu; c < n; ++c) {
+        double col[kImu];
+        for (int i = 0; i < kImu; ++i) {
+            double s = 0.0;
+            for (int k = 0; k < kImu; ++k) s += Phi(i, k) * w->P[k][c];
+            col[i] = s;
+        }
+        for (int i = 0; i < kImu; ++i) {
+            w->P[i][c] = col[i];
+            w->P[c][i] = col[i];
+        }
+    }
+    reset_pending(w);
+}
+
+void start_common(sfd_window_t *w, int64_t utime) {
+    w->started = 1;
+    w->utime = utime;
+    w->num_clones = 0;
+    w->num_tracks = 0;
+    for (int s = 0; s < SFD_WINDOW_INDEX_SLOTS; ++s) w->index[s] = -1;
+    std::memset(w->P, 0, sizeof w->P);
+    for (int i = 0; i < kImu; ++i) w->P[i][i] = w->prm.p0_diag[i];
+    for (int k = 0; k < 3; ++k) {
+        w->fe_p_IinW_m[k] = w->p_IinW_m[k];
+        w->fe_v_IinW_m_s[k] = w->v_IinW_m_s[k];
+    }
+    reset_pending(w);
+}
+
+int32_t slot_of(int64_t id) {
+    const uint64_t h = static_cast<uint64_t>(id) * 0x9E3779B97F4A7C15ULL;
+    return static_cast<int32_t>((h >> 17) % static_cast<uint64_t>(SFD_WINDOW_INDEX_SLOTS));
+}
+
+/// Index of track @p id in w->tracks, or -1 (open addressing, linear probing; the table has more
+/// than twice as many slots as tracks, so every probe sequence reaches an empty slot).
+int32_t find_track(const sfd_window_t &w, int64_t id) {
+    int32_t s = slot_of(id);
+    for (int32_t probe = 0; probe < SFD_WINDOW_INDEX_SLOTS; ++probe) {
+        const int16_t v = w.index[s];
+        if (v < 0) return -1;
+        if (v < w.num_tracks && w.tracks[v].id == id) return v;
+        s = (s + 1 == SFD_WINDOW_INDEX_SLOTS) ? 0 : s + 1;
+    }
+    return -1;
+}
+
+void index_insert(sfd_window_t *w, int64_t id, int16_t k) {
+    int32_t s = slot_of(id);
+    for (int32_t probe = 0; probe < SFD_WINDOW_INDEX_SLOTS; ++probe) {
+        if (w->index[s] < 0) {
+            w->index[s] = k;
+            return;
+        }
+        s = (s + 1 == SFD_WINDOW_INDEX_SLOTS) ? 0 : s + 1;
+    }
+}
+
+/// Removes the tracks with used == 0 and rebuilds the index.
+void compact_tracks(sfd_window_t *w) {
+    int32_t m = 0;
+    for (int32_t k = 0; k < w->num_tracks; ++k) {
+        if (w->tracks[k].used <= 0) continue;
+        if (m != k) w->tracks[m] = w->tracks[k];
+        ++m;
+    }
+    w->num_tracks = m;
+    for (int s = 0; s < SFD_WINDOW_INDEX_SLOTS; ++s) w->index[s] = -1;
+    for (int32_t k = 0; k < m; ++k) index_insert(w, w->tracks[k].id, static_cast<int16_t>(k));
+}
+
+/// Camera pose of an IMU pose: R_CtoW = R_ItoW R_CtoI, p_CinW = p_IinW + R_ItoW p_CinI.
+struct CamPose {
+    Mat3 R_WtoC;
+    Vec3 p_CinW;
+};
+
+CamPose cam_pose(const Mat3 &R_ItoW, const Vec3 &p_IinW, const sfd_extrinsics_t &ext) {
+    const Mat3 R_CtoI = Eigen::Map<const Mat3>(ext.R_CtoI);
+    CamPose c;
+    c.R_WtoC = (R_ItoW * R_CtoI).transpose();
+    c.p_CinW = p_IinW + R_ItoW * v3(ext.p_CinI);
+    return c;
+}
+
+/// Inverse of a symmetric 2x2 given as (xx, xy, yy); false unless positive definite.
+bool inv2(const double c[3], Mat2 *out) {
+    const double det = c[0] * c[2] - c[1] * c[1];
+    if (!(c[0] > 0.0) || !(det > 0.0) || !std::isfinite(det)) return false;
+    (*out)(0, 0) = c[2] / det;
+    (*out)(0, 1) = -c[1] / det;
+    (*out)(1, 0) = -c[1] / det;
+    (*out)(1, 1) = c[0] / det;
+    return true;
+}
+
+/// d(x/z, y/z)/d(x, y, z) at a point in the camera frame (z > 0).
+Eigen::Matrix<double, 2, 3, Eigen::RowMajor> proj_jacobian(const Vec3 &pc) {
+    Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J;
+    const double iz = 1.0 / pc.z();
+    J << iz, 0.0, -pc.x() * iz * iz, 0.0, iz, -pc.y() * iz * iz;
+    return J;
+}
+
+/// Triangulates a track over its clones (current estimates): the linear least-squares point of
+/// the rays (sum_k (I - b_k b_k^T)) p = sum_k (I - b_k b_k^T) c_k, or the depth prior's point when
+/// the rays are nearly parallel, then at most gauss_newton_iterations Gauss-Newton steps on the
+/// whitened reprojection errors plus the depth prior. False when the point is not finite or not
+/// within [min_depth_m, max_depth_m] in front of every clone.
+bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPose *pose,
+                 bool depth_row, Vec3 *p_out) {
+    Mat3 A = Mat3::Zero();
+    Vec3 b = Vec3::Zero();
+    for (int k = 0; k < t.used; ++k) {
+        const Vec3 ray = pose[k].R_WtoC.transpose() * Vec3(t.xn[k][0], t.xn[k][1], 1.0);
+        const Vec3 u = ray.normalized();
+        const Mat3 M = Mat3::Identity() - u * u.transpose();
+        A += M;
+        b += M * pose[k].p_CinW;
+    }
+    // Parallax: the smallest eigenvalue of A is ~ sum of squared angles between the rays.
+    Eigen::SelfAdjointEigenSolver<Mat3> es(A, Eigen::EigenvaluesOnly);
+    const double lmin = es.eigenvalues()(0);
+    Vec3 p;
+    if (lmin > 1e-6 && std::isfinite(lmin)) {
+        p = A.ldlt().solve(b);
+    } else if (depth_row) {
+        p = pose[0].p_CinW +
+            pose[0].R_WtoC.transpose() * (t.depth_m * Vec3(t.xn[0][0], t.xn[0][1], 1.0));
+    } else {
+        return false;
+    }
+    if (!all_finite(p.data(), 3)) return false;
+    const double var_d = t.depth_var_m2 + w.prm.depth_var_floor_m2;
+    for (int it = 0; it < w.prm.gauss_newton_iterations; ++it) {
+        Mat3 H = Mat3::Zero();
+        Vec3 g = Vec3::Zero();
+        for (int k = 0; k < t.used; ++k) {
+            const Vec3 pc = pose[k].R_WtoC * (p - pose[k].p_CinW);
+            if (!(pc.z() > w.prm.min_depth_m)) return false;
+            const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J =
+                proj_jacobian(pc) * pose[k].R_WtoC;
+            const Vec2 r(t.xn[k][0] - pc.x() / pc.z(), t.xn[k][1] - pc.y() / pc.z());
+            Mat2 W;
+            if (!inv2(t.cov_xn[k], &W)) return false;
+            H += J.transpose() * W * J;
+            g += J.transpose() * W * r;
+        }
+        if (depth_row) {
+            const Vec3 pc = pose[0].R_WtoC * (p - pose[0].p_CinW);
+            const Vec3 J = pose[0].R_WtoC.row(2).transpose();
+            H += J * J.transpose() / var_d;
+            g += J * (t.depth_m - pc.z()) / var_d;
+        }
+        const Eigen::LDLT<Mat3> ldlt(H);
+        if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+        const Vec3 dp = ldlt.solve(g);
+        if (!all_finite(dp.data(), 3)) return false;
+        p += dp;
+        if (dp.norm() <= 1e-9 * (1.0 + p.norm())) break;
+    }
+    for (int k = 0; k < t.used; ++k) {
+        const double z = (pose[k].R_WtoC * (p - pose[k].p_CinW)).z();
+        if (!(z >= w.prm.min_depth_m && z <= w.prm.max_depth_m)) return false;
+    }
+    *p_out = p;
+    return true;
+}
+
+enum class TrackOutcome { kNoGeometry, kGated, kUsed, kNumeric };
+
+/// The track's residual (1) at the current clones, its Jacobians at the first estimates, the
+/// projection (2), the gate (3) and, when it passes, the fold into the stack.
+TrackOutcome process_track(sfd_window_t *w, const sfd_window_track_t &t,
+                           const sfd_extrinsics_t &ext, double *gamma_out, int32_t *dof_out) {
+    const uint32_t oldest = w->clones[0].seq;
+    const int32_t c0 = static_cast<int32_t>(t.first_clone - oldest);
+    if (c0 < 0 || c0 + t.used > w->num_clones) return TrackOutcome::kNoGeometry;
+    CamPose cur[SFD_MAX_WINDOW];
+    CamPose fej[SFD_MAX_WINDOW];
+    Mat3 R_fe[SFD_MAX_WINDOW];
+    Vec3 p_fe[SFD_MAX_WINDOW];
+    for (int k = 0; k < t.used; ++k) {
+        const sfd_window_clone_t &c = w->clones[c0 + k];
+        cur[k] = cam_pose(quat_rot(c.q_ItoW), v3(c.p_IinW_m), ext);
+        if (w->prm.first_estimates) {
+            R_fe[k] = Eigen::Map<const Mat3>(c.fe_R_ItoW);
+            p_fe[k] = v3(c.fe_p_IinW_m);
+        } else {
+            R_fe[k] = quat_rot(c.q_ItoW);
+            p_fe[k] = v3(c.p_IinW_m);
+        }
+        fej[k] = cam_pose(R_fe[k], p_fe[k], ext);
+    }
+    const bool depth_row = w->prm.use_depth_prior && t.depth_m > 0.0 && std::isfinite(t.depth_m);
+    Vec3 pf;
+    if (!triangulate(*w, t, cur, depth_row, &pf)) return TrackOutcome::kNoGeometry;
+
+    sfd_msckf_track_t &tr = w->scratch_track;
+    const int n = dim(*w);
+    const int rows = 2 * t.used + (depth_row ? 1 : 0);
+    tr.rows = rows;
+    tr.n = n;
+    tr.projected = 0;
+    for (int i = 0; i < rows; ++i) {
+        for (int j = 0; j < n; ++j) tr.Hx[i][j] = 0.0;
+        for (int j = 0; j < rows; ++j) tr.R[i][j] = 0.0;
+    }
+    const Mat3 R_CtoI = Eigen::Map<const Mat3>(ext.R_CtoI);
+    for (int k = 0; k < t.used; ++k) {
+        const Vec3 pc = cur[k].R_WtoC * (pf - cur[k].p_CinW);
+        const Vec3 pcf = fej[k].R_WtoC * (pf - fej[k].p_CinW);
+        if (!(pcf.z() > 1e-6)) return TrackOutcome::kNoGeometry;
+        const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> Jp = proj_jacobian(pcf);
+        // d pc / d(dtheta_global) = R_CtoI^T R_ItoW^T [p_f - p_I]x, d pc / d p_I = -R_WtoC.
+        const Mat3 dth = R_CtoI.transpose() * R_fe[k].transpose() * skew(pf - p_fe[k]);
+        const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> Hth = Jp * dth;
+        const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> Hf = Jp * fej[k].R_WtoC;
+        const int col = kImu + 6 * (c0 + k);
+        for (int a = 0; a < 2; ++a) {
+            const int r = 2 * k + a;
+            for (int j = 0; j < 3; ++j) {
+                tr.Hx[r][col + j] = -Hf(a, j);
+                tr.Hx[r][col + 3 + j] = Hth(a, j);
+                tr.Hf[r][j] = Hf(a, j);
+            }
+        }
+        const std::size_t ru = 2U * static_cast<std::size_t>(k), rv = ru + 1U;
+        tr.r[ru] = t.xn[k][0] - pc.x() / pc.z();
+        tr.r[rv] = t.xn[k][1] - pc.y() / pc.z();
+        tr.R[ru][ru] = t.cov_xn[k][0];
+        tr.R[ru][rv] = t.cov_xn[k][1];
+        tr.R[rv][ru] = t.cov_xn[k][1];
+        tr.R[rv][rv] = t.cov_xn[k][2];
+    }
+    if (depth_row) {
+        const int r = 2 * t.used;
+        const Vec3 pc = cur[0].R_WtoC * (pf - cur[0].p_CinW);
+        const Mat3 dth = R_CtoI.transpose() * R_fe[0].transpose() * skew(pf - p_fe[0]);
+        const int col = kImu + 6 * c0;
+        for (int j = 0; j < 3; ++j) {
+            tr.Hx[r][col + j] = -fej[0].R_WtoC(2, j);
+            tr.Hx[r][col + 3 + j] = dth(2, j);
+            tr.Hf[r][j] = fej[0].R_WtoC(2, j);
+        }
+        tr.r[r] = t.depth_m - pc.z();
+        tr.R[r][r] = t.depth_var_m2 + w->prm.depth_var_floor_m2;
+    }
+    if (sfd_msckf_track_project(&tr) != SFD_OK) return TrackOutcome::kNoGeometry;
+    double gamma = 0.0;
+    int32_t dof = 0;
+    if (sfd_msckf_track_gate(&tr, &w->P[0][0], &gamma, &dof) != SFD_OK) {
+        return TrackOutcome::kNumeric;
+    }
+    *gamma_out = gamma;
+    *dof_out = dof;
+    if (dof < 1 || dof >= SFD_MSCKF_TRACK_ROWS || gamma > w->gate[dof]) return TrackOutcome::kGated;
+    if (sfd_msckf_stack_fold(&w->scratch_stack, &tr) != SFD_OK) return TrackOutcome::kNumeric;
+    return TrackOutcome::kUsed;
+}
+
+/// Adds dx to the nominal state (IMU and clones); first estimates stay.
+bool inject(sfd_window_t *w, const double *dx) {
+    if (!all_finite(dx, static_cast<std::size_t>(dim(*w)))) return false;
+    for (int k = 0; k < 3; ++k) {
+        w->p_IinW_m[k] += dx[P_ + k];
+        w->v_IinW_m_s[k] += dx[V_ + k];
+        w->bg_rad_s[k] += dx[BG + k];
+        w->ba_m_s2[k] += dx[BA + k];
+    }
+    store_quat(so3_exp(v3(dx + TH)) * quat_rot(w->q_ItoW), w->q_ItoW);
+    for (int c = 0; c < w->num_clones; ++c) {
+        sfd_window_clone_t &cl = w->clones[c];
+        const double *d = dx + kImu + 6 * static_cast<std::ptrdiff_t>(c);
+        for (int k = 0; k < 3; ++k) cl.p_IinW_m[k] += d[k];
+        store_quat(so3_exp(v3(d + 3)) * quat_rot(cl.q_ItoW), cl.q_ItoW);
+    }
+    return true;
+}
+
+/// Appends the current IMU pose as the newest clone: P gains the rows and columns of (dp, dtheta).
+void augment(sfd_window_t *w, int64_t utime) {
+    const int n = dim(*w);
+    const int c = n;  // first index of the new clone
+    const int src[6] = {P_, P_ + 1, P_ + 2, TH, TH + 1, TH + 2};
+    for (int a = 0; a < 6; ++a) {
+        for (int j = 0; j < n; ++j) {
+            w->P[c + a][j] = w->P[src[a]][j];
+            w->P[j][c + a] = w->P[j][src[a]];
+        }
+    }
+    for (int a = 0; a < 6; ++a) {
+        for (int b = 0; b < 6; ++b) w->P[c + a][c + b] = w->P[src[a]][src[b]];
+    }
+    sfd_window_clone_t &cl = w->clones[w->num_clones];
+    std::memcpy(cl.p_IinW_m, w->p_IinW_m, sizeof cl.p_IinW_m);
+    std::memcpy(cl.q_ItoW, w->q_ItoW, sizeof cl.q_ItoW);
+    std::memcpy(cl.fe_p_IinW_m, w->p_IinW_m, sizeof cl.fe_p_IinW_m);
+    const Mat3 R = quat_rot(w->q_ItoW);
+    Eigen::Map<Mat3>(cl.fe_R_ItoW) = R;
+    cl.utime = utime;
+    cl.seq = w->next_seq++;
+    w->num_clones++;
+}
+
+/// Deletes the oldest clone: its rows and columns of P, and the observations made in it.
+void marginalize_oldest(sfd_window_t *w) {
+    const int n = dim(*w);
+    const uint32_t oldest = w->clones[0].seq;
+    for (int32_t k = 0; k < w->num_tracks; ++k) {
+        sfd_window_track_t &t = w->tracks[k];
+        if (t.used <= 0 || t.first_clone != oldest) continue;
+        // Not used before its first clone leaves: its first observation (and depth prior) go.
+        for (int j = 1; j < t.used; ++j) {
+            t.xn[j - 1][0] = t.xn[j][0];
+            t.xn[j - 1][1] = t.xn[j][1];
+            for (int e = 0; e < 3; ++e) t.cov_xn[j - 1][e] = t.cov_xn[j][e];
+        }
+        t.used -= 1;
+        t.first_clone += 1;
+        t.depth_m = 0.0;
+    }
+    // Rows/columns kImu..kImu+5 removed: the later ones move up by 6.
+    for (int i = 0; i < n; ++i) {
+        if (i >= kImu && i < kImu + 6) continue;
+        const int ri = (i >= kImu + 6) ? i - 6 : i;
+        for (int j = 0; j < n; ++j) {
+            if (j >= kImu && j < kImu + 6) continue;
+            const int rj = (j >= kImu + 6) ? j - 6 : j;
+            w->P[ri][rj] = w->P[i][j];
+        }
+    }
+    for (int c = 1; c < w->num_clones; ++c) w->clones[c - 1] = w->clones[c];
+    w->num_clones--;
+}
+
+bool obs_valid(const sfd_window_obs_t &o) {
+    return std::isfinite(o.xn[0]) && std::isfinite(o.xn[1]) && std::isfinite(o.cov_xn[0]) &&
+           std::isfinite(o.cov_xn[1]) && std::isfinite(o.cov_xn[2]) && o.cov_xn[0] > 0.0 &&
+           o.cov_xn[2] > 0.0 && o.cov_xn[0] * o.cov_xn[2] - o.cov_xn[1] * o.cov_xn[1] > 0.0 &&
+           std::isfinite(o.depth_m) && std::isfinite(o.depth_var_m2) && o.depth_var_m2 >= 0.0;
+}
+
+}  // namespace
+}  // namespace sfd
+
+using namespace sfd;
+
+extern "C" sfd_status_t sfd_window_params_default(sfd_window_params_t *params) {
+    if (params == nullptr) return SFD_ERR_INVAL;
+    std::memset(params, 0, sizeof *params);
+    sfd_ekf_noise_default(&params->noise);
+    for (int k = 0; k < 3; ++k) {
+        params->p0_diag[P_ + k] = 1e-6;
+        params->p0_diag[V_ + k] = 1e-4;
+        params->p0_diag[TH + k] = (k == 2) ? 1e-6 : 1e-4;
+        params->p0_diag[BG + k] = 1e-6;
+        params->p0_diag[BA + k] = 4e-3;
+    }
+    params->window = SFD_MAX_WINDOW;
+    params->min_observations = 3;
+    params->gate_alpha = 0.01;
+    params->min_depth_m = 0.1;
+    params->max_depth_m = 1e4;
+    params->use_depth_prior = 1;
+    params->depth_var_floor_m2 = 1e-4;
+    params->gauss_newton_iterations = 5;
+    params->first_estimates = 1;
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_window_init(sfd_window_t *w, const sfd_window_params_t *params) {
+    if (w == nullptr || params == nullptr || !params_valid(*params)) return SFD_ERR_INVAL;
+    double gate[SFD_MSCKF_TRACK_ROWS] = {};
+    for (int k = 1; k < SFD_MSCKF_TRACK_ROWS; ++k) {
+        if (sfd_chi2_quantile_upper(params->gate_alpha, k, &gate[k]) != SFD_OK) {
+            return SFD_ERR_INVAL;
+        }
+    }
+    std::memset(w, 0, sizeof *w);
+    w->prm = *params;
+    std::memcpy(w->gate, gate, sizeof gate);
+    w->started = 0;
+    reset_pending(w);
+    for (int s = 0; s < SFD_WINDOW_INDEX_SLOTS; ++s) w->index[s] = -1;
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_window_start_at_rest(sfd_window_t *w, int64_t utime,
+                                                 const double accel_m_s2[3],
+                                                 const double gyro_bias_rad_s[3]) {
+    if (w == nullptr || accel_m_s2 == nullptr || gyro_bias_rad_s == nullptr) return SFD_ERR_INVAL;
+    if (!all_finite(accel_m_s2, 3) || !all_finite(gyro_bias_rad_s, 3)) return SFD_ERR_INVAL;
+    // The attitude of sfd_ekf_init_from_gravity (roll, pitch from the specific force, yaw 0).
+    sfd_ekf_t tmp;
+    double p0[SFD_EKF_DIM];
+    for (int i = 0; i < SFD_EKF_DIM; ++i) p0[i] = w->prm.p0_diag[i];
+    const sfd_status_t st =
+        sfd_ekf_init_from_gravity(&tmp, &w->prm.noise, accel_m_s2, gyro_bias_rad_s, p0);
+    if (st != SFD_OK) return st;
+    for (int k = 0; k < 3; ++k) {
+        w->p_IinW_m[k] = 0.0;
+        w->v_IinW_m_s[k] = 0.0;
+        w->bg_rad_s[k] = gyro_bias_rad_s[k];
+        w->ba_m_s2[k] = 0.0;
+    }
+    std::memcpy(w->q_ItoW, tmp.q_ItoW, sizeof w->q_ItoW);
+    start_common(w, utime);
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_window_start_at(sfd_window_t *w, int64_t utime, const double p_m[3],
+                                            const double v_m_s[3], const double q_ItoW[4],
+                                            const double bg_rad_s[3], const double ba_m_s2[3]) {
+    if (w == nullptr || p_m == nullptr || v_m_s == nullptr || q_ItoW == nullptr ||
+        bg_rad_s == nullptr || ba_m_s2 == nullptr) {
+        return SFD_ERR_INVAL;
+    }
+    if (!all_finite(p_m, 3) || !all_finite(v_m_s, 3) || !all_finite(q_ItoW, 4) ||
+        !all_finite(bg_rad_s, 3) || !all_finite(ba_m_s2, 3)) {
+        return SFD_ERR_INVAL;
+    }
+    const double qn = std::sqrt(q_ItoW[0] * q_ItoW[0] + q_ItoW[1] * q_ItoW[1] +
+                                q_ItoW[2] * q_ItoW[2] + q_ItoW[3] * q_ItoW[3]);
+    if (!(std::fabs(qn - 1.0) <= 1e-6)) return SFD_ERR_INVAL;
+    for (int k = 0; k < 3; ++k) {
+        w->p_IinW_m[k] = p_m[k];
+        w->v_IinW_m_s[k] = v_m_s[k];
+        w->bg_rad_s[k] = bg_rad_s[k];
+        w->ba_m_s2[k] = ba_m_s2[k];
+    }
+    for (int k = 0; k < 4; ++k) w->q_ItoW[k] = q_ItoW[k] / qn;
+    start_common(w, utime);
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_window_propagate(sfd_window_t *w, const double gyro_rad_s[3],
+                                             const double accel_m_s2[3], double dt_s) {
+    if (w == nullptr || gyro_rad_s == nullptr || accel_m_s2 == nullptr) return SFD_ERR_INVAL;
+    if (!w->started) return SFD_ERR_STATE;
+    if (!all_finite(gyro_rad_s, 3) || !all_finite(accel_m_s2, 3) || !std::isfinite(dt_s) ||
+        !(dt_s > 0.0) || dt_s > w->prm.noise.max_dt_s) {
+        return SFD_ERR_INVAL;
+    }
+    const double dt = dt_s;
+    const Mat3 R = quat_rot(w->q_ItoW);
+    const Vec3 om = v3(gyro_rad_s) - v3(w->bg_rad_s);
+    const Vec3 a = v3(accel_m_s2) - v3(w->ba_m_s2);
+    const Vec3 g(0.0, 0.0, -w->prm.noise.gravity_m_s2);
+    const Vec3 acc_W = R * a + g;
+    const Vec3 p0 = v3(w->p_IinW_m), v0 = v3(w->v_IinW_m_s);
+    const Vec3 p1 = p0 + v0 * dt + 0.5 * dt * dt * acc_W;
+    const Vec3 v1 = v0 + dt * acc_W;
+    const Mat3 R1 = R * so3_exp(dt * om);
+    // Transition of the global-error state over dt, eq. (5) of core/docs/window_filter.md, at
+    // the first estimates (fe_p, fe_v: the state before the last update) so that
+    // Phi_vtheta = -[v1 - v0^fe - g dt]x and Phi_ptheta = -[p1 - p0^fe - v0^fe dt - g dt^2/2]x
+    // chain exactly over steps (the null-space property of first-estimate Jacobians).
+    const Vec3 fp = w->prm.first_estimates ? v3(w->fe_p_IinW_m) : p0;
+    const Vec3 fv = w->prm.first_estimates ? v3(w->fe_v_IinW_m_s) : v0;
+    Mat15 F = Mat15::Identity();
+    F.block<3, 3>(P_, V_) = dt * Mat3::Identity();
+    F.block<3, 3>(P_, TH) = -skew(p1 - fp - fv * dt - 0.5 * dt * dt * g);
+    F.block<3, 3>(P_, BA) = -0.5 * dt * dt * R;
+    F.block<3, 3>(V_, TH) = -skew(v1 - fv - dt * g);
+    F.block<3, 3>(V_, BA) = -dt * R;
+    F.block<3, 3>(TH, BG) = -dt * R1;
+    // Discrete noise: white accelerometer noise into v and p (with their correlation), white gyro
+    // noise into theta (isotropic, so the rotation drops out), random walks into the biases.
+    const sfd_ekf_noise_t &nz = w->prm.noise;
+    const double qa = nz.accel_noise_m_s2_rthz * nz.accel_noise_m_s2_rthz;
+    const double qg = nz.gyro_noise_rad_s_rthz * nz.gyro_noise_rad_s_rthz;
+    const double qbg = nz.gyro_bias_rw_rad_s2_rthz * nz.gyro_bias_rw_rad_s2_rthz;
+    const double qba = nz.accel_bias_rw_m_s3_rthz * nz.accel_bias_rw_m_s3_rthz;
+    Mat15 Q = Mat15::Zero();
+    for (int k = 0; k < 3; ++k) {
+        Q(P_ + k, P_ + k) = qa * dt * dt * dt / 3.0;
+        Q(P_ + k, V_ + k) = qa * dt * dt / 2.0;
+        Q(V_ + k, P_ + k) = qa * dt * dt / 2.0;
+        Q(V_ + k, V_ + k) = qa * dt;
+        Q(TH + k, TH + k) = qg * dt;
+        Q(BG + k, BG + k) = qbg * dt;
+        Q(BA + k, BA + k) = qba * dt;
+    }
+    Map15 Phi(&w->Phi[0][0]);
+    Map15 Qd(&w->Qd[0][0]);
+    const Mat15 Phin = mul15(F, Phi);
+    const Mat15 Qn = mul15(mul15(F, Qd), F.transpose()) + Q;
+    if (!all_finite(p1.data(), 3) || !all_finite(v1.data(), 3) || !all_finite(R1.data(), 9) ||
+        !all_finite(Phin.data(), Mat15::SizeAtCompileTime) ||
+        !all_finite(Qn.data(), Mat15::SizeAtCompileTime)) {
+        w->numeric_faults++;
+        return SFD_ERR_NUMERIC;
+    }
+    Phi = Phin;
+    Qd = 0.5 * (Qn + Qn.transpose());
+    w->pending = 1;
+    for (int k = 0; k < 3; ++k) {
+        w->p_IinW_m[k] = p1(k);
+        w->v_IinW_m_s[k] = v1(k);
+        w->fe_p_IinW_m[k] = p1(k);
+        w->fe_v_IinW_m_s[k] = v1(k);
+    }
+    store_quat(R1, w->q_ItoW);
+    w->utime += static_cast<int64_t>(std::llround(dt * 1e6));
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
+                                         const sfd_window_obs_t *obs, int32_t n,
+                                         const sfd_extrinsics_t *ext, sfd_window_result_t *result) {
+    if (w == nullptr || result == nullptr || ext == nullptr || n < 0 || n > SFD_WINDOW_MAX_TRACKS ||
+        (n > 0 && obs == nullptr)) {
+        return SFD_ERR_INVAL;
+    }
+    if (!w->started) return SFD_ERR_STATE;
+    std::memset(result, 0, offsetof(sfd_window_result_t, gated_ids));
+    flush(w);
+    if (w->num_clones >= w->prm.window) marginalize_oldest(w);  // defensive: invariant
+    augment(w, utime);
+    w->utime = utime;
+    const uint32_t newest = w->clones[w->num_clones - 1].seq;
+    for (int32_t k = 0; k < w->num_tracks; ++k) w->tracks[k].seen = 0;
+
+    // Observations: flagged tracks deleted, the others appended to their track or started.
+    for (int32_t i = 0; i < n; ++i) {
+        const sfd_window_obs_t &o = obs[i];
+        const int32_t k = find_track(*w, o.track_id);
+        if (o.drop) {
+            if (k >= 0 && w->tracks[k].used > 0) {
+                w->tracks[k].used = 0;  // deleted at the compaction below
+                w->tracks[k].seen = 1;  // not a candidate
+                result->dropped++;
+            }
+            continue;
+        }
+        if (!obs_valid(o)) {
+            result->overflow++;
+            continue;
+        }
+        sfd_window_track_t *t = nullptr;
+        if (k >= 0) {
+            t = &w->tracks[k];
+            if (t->seen || t->used <= 0 || t->used >= SFD_MAX_WINDOW ||
+                t->first_clone + static_cast<uint32_t>(t->used) != newest) {
+                result->overflow++;  // duplicate id in the frame, or a deleted track
+                continue;
+            }
+        } else {
+            if (w->num_tracks >= SFD_WINDOW_MAX_TRACKS) {
+                result->overflow++;
+                continue;
+            }
+            t = &w->tracks[w->num_tracks];
+            std::memset(t, 0, sizeof *t);
+            t->id = o.track_id;
+            t->first_clone = newest;
+            t->depth_m = (o.depth_m > 0.0) ? o.depth_m : 0.0;
+            t->depth_var_m2 = o.depth_var_m2;
+            index_insert(w, o.track_id, static_cast<int16_t>(w->num_tracks));
+            w->num_tracks++;
+        }
+        const int u = t->used;
+        t->xn[u][0] = o.xn[0];
+        t->xn[u][1] = o.xn[1];
+        for (int e = 0; e < 3; ++e) t->cov_xn[u][e] = o.cov_xn[e];
+        t->used = u + 1;
+        t->seen = 1;
+        result->added++;
+    }
+
+    // Tracks due: ended (not seen now), or reaching the oldest clone of a full window.
+    const bool full = w->num_clones >= w->prm.window;
+    const uint32_t oldest = w->clones[0].seq;
+    sfd_msckf_stack_reset(&w->scratch_stack, dim(*w));
+    for (int32_t k = 0; k < w->num_tracks; ++k) {
+        sfd_window_track_t &t = w->tracks[k];
+        if (t.used <= 0) continue;
+        const bool due = !t.seen || (full && t.first_clone == oldest);
+        if (!due) continue;
+        result->candidates++;
+        if (t.used < w->prm.min_observations) {
+            result->too_short++;
+            t.used = 0;
+            continue;
+        }
+        double gamma = 0.0;
+        int32_t dof = 0;
+        const TrackOutcome out = process_track(w, t, *ext, &gamma, &dof);
+        switch (out) {
+            case TrackOutcome::kUsed:
+                result->used++;
+                result->rows += dof;
+                result->nis += gamma;
+                break;
+            case TrackOutcome::kGated:
+                result->gated++;
+                if (result->num_gated_ids < SFD_WINDOW_MAX_TRACKS) {
+                    result->gated_ids[result->num_gated_ids++] = t.id;
+                }
+                break;
+            case TrackOutcome::kNumeric:
+                w->numeric_faults++;
+                result->no_geometry++;
+                break;
+            default:
+                result->no_geometry++;
+                break;
+        }
+        t.used = 0;  // each observation informs the filter once; a gated one never
+    }
+    result->update_status = SFD_OK;
+    if (w->scratch_stack.folded > 0) {
+        const sfd_status_t st =
+            sfd_msckf_update(&w->scratch_stack, &w->P[0][0], w->scratch_dx, &w->scratch_work);
+        if (st != SFD_OK || !inject(w, w->scratch_dx)) {
+            w->numeric_faults++;
+            result->update_status = (st != SFD_OK) ? st : SFD_ERR_NUMERIC;
+        }
+    }
+    if (w->num_clones >= w->prm.window) marginalize_oldest(w);
+    compact_tracks(w);
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_window_to_ekf(sfd_window_t *w, sfd_ekf_t *ekf) {
+    if (w == nullptr || ekf == nullptr) return SFD_ERR_INVAL;
+    if (!w->started) return SFD_ERR_STATE;
+    flush(w);
+    std::memset(ekf, 0, sizeof *ekf);
+    std::memcpy(ekf->p_IinW_m, w->p_IinW_m, sizeof ekf->p_IinW_m);
+    std::memcpy(ekf->v_IinW_m_s, w->v_IinW_m_s, sizeof ekf->v_IinW_m_s);
+    std::memcpy(ekf->q_ItoW, w->q_ItoW, sizeof ekf->q_ItoW);
+    std::memcpy(ekf->bg_rad_s, w->bg_rad_s, sizeof ekf->bg_rad_s);
+    std::memcpy(ekf->ba_m_s2, w->ba_m_s2, sizeof ekf->ba_m_s2);
+    ekf->noise = w->prm.noise;
+    ekf->initialized = 1;
+    // dtheta_local = R^T dtheta_global: P_local = T P T^T with T = diag(I, I, R^T, I, I).
+    Mat15 T = Mat15::Identity();
+    T.block<3, 3>(TH, TH) = quat_rot(w->q_ItoW).transpose();
+    Mat15 P;
+    for (int i = 0; i < kImu; ++i) {
+        for (int j = 0; j < kImu; ++j) P(i, j) = w->P[i][j];
+    }
+    const Mat15 Pl = mul15(mul15(T, P), T.transpose());
+    for (int i = 0; i < kImu; ++i) {
+        for (int j = 0; j < kImu; ++j) ekf->P[i * kImu + j] = 0.5 * (Pl(i, j) + Pl(j, i));
+    }
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_window_position_var(sfd_window_t *w, double var_m2[3]) {
+    if (w == nullptr || var_m2 == nullptr) return SFD_ERR_INVAL;
+    if (!w->started) return SFD_ERR_STATE;
+    flush(w);
+    for (int k = 0; k < 3; ++k) var_m2[k] = w->P[P_ + k][P_ + k];
+    return SFD_OK;
+}

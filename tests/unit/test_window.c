@@ -1,0 +1,374 @@
+/* SPDX-License-Identifier: MIT */
+/* unit.window: the sliding-window filter (sfd_window.h) on a simulated flight in a static scene
+ * (a 2 m circle with roll, pitch and height oscillations, a camera looking outwards at points on a
+ * 6 m cylinder, 20 Hz frames, a 200 Hz IMU with the modelled white noise and bias random walks,
+ * 1 px of pixel noise at f = 400 px):
+ * - the estimate stays within 2 % of the distance flown, and the position and attitude NEES over
+ *   20 Monte Carlo runs of 30 s are inside their 95 % chi-square bands;
+ * - the gate refuses a track that jumps to another point (and lists it), the estimate is not
+ *   pulled, and the jumped observations never reach the update; a flagged track is dropped;
+ * - capacities (tracks, window) and bad input are status codes or counters, never writes past an
+ *   array. */
+#include "sfd_test.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include <sfd/sfd_chi2.h>
+#include <sfd/sfd_prng.h>
+#include <sfd/sfd_rotation.h>
+#include <sfd/sfd_window.h>
+
+static sfd_window_t g_w;
+
+enum { NPTS = 400, IMU_PER_FRAME = 10 };
+static const double kDt = 0.005;       /* IMU period (s) */
+static const double kSigmaXn = 0.0025; /* 1 px at f = 400 px */
+
+typedef struct {
+    double p[3], v[3], R[9];
+} pose_t;
+
+static double g_pts[NPTS][3];
+
+static void mat_mul(const double A[9], const double B[9], double C[9]) {
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+            C[3 * r + c] = 0.0;
+            for (int k = 0; k < 3; ++k) C[3 * r + c] += A[3 * r + k] * B[3 * k + c];
+        }
+    }
+}
+
+static void mat_tmul(const double A[9], const double B[9], double C[9]) { /* A^T B */
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+            C[3 * r + c] = 0.0;
+            for (int k = 0; k < 3; ++k) C[3 * r + c] += A[3 * k + r] * B[3 * k + c];
+        }
+    }
+}
+
+/* The true trajectory: position, velocity (analytic) and R_ItoW at t. */
+static void truth(double t, pose_t *x) {
+    const double w = 2.0 * M_PI / 10.0, r = 2.0;
+    x->p[0] = r * cos(w * t);
+    x->p[1] = r * sin(w * t);
+    x->p[2] = 1.0 + 0.3 * sin(0.5 * t);
+    x->v[0] = -r * w * sin(w * t);
+    x->v[1] = r * w * cos(w * t);
+    x->v[2] = 0.15 * cos(0.5 * t);
+    const double yaw = w * t + 0.2 * sin(0.9 * t);
+    const double rz[3] = {0, 0, yaw}, ry[3] = {0, 0.1 * sin(0.7 * t), 0},
+                 rx[3] = {0.1 * sin(1.3 * t), 0, 0};
+    double Rz[9], Ry[9], Rx[9], T[9];
+    sfd_so3_exp(rz, Rz);
+    sfd_so3_exp(ry, Ry);
+    sfd_so3_exp(rx, Rx);
+    mat_mul(Rz, Ry, T);
+    mat_mul(T, Rx, x->R);
+}
+
+/* Camera: optical axis along IMU x, image x along IMU -y, image y along IMU -z. */
+static void extrinsics(sfd_extrinsics_t *ext) {
+    const double R[9] = {0, 0, 1, -1, 0, 0, 0, -1, 0}; /* columns: camera axes in the IMU frame */
+    memcpy(ext->R_CtoI, R, sizeof R);
+    ext->p_CinI[0] = 0.05;
+    ext->p_CinI[1] = 0.0;
+    ext->p_CinI[2] = 0.02;
+}
+
+/* Point k in the camera of pose x: normalized coordinates; 0 when not visible. */
+static int observe(const pose_t *x, const sfd_extrinsics_t *ext, const double pw[3], double xn[2]) {
+    double R_CtoW[9];
+    mat_mul(x->R, ext->R_CtoI, R_CtoW);
+    double pc_w[3];
+    for (int k = 0; k < 3; ++k) {
+        pc_w[k] = x->p[k];
+        for (int j = 0; j < 3; ++j) pc_w[k] += x->R[3 * k + j] * ext->p_CinI[j];
+    }
+    double c[3];
+    for (int k = 0; k < 3; ++k) {
+        c[k] = 0.0;
+        for (int j = 0; j < 3; ++j) c[k] += R_CtoW[3 * j + k] * (pw[j] - pc_w[j]);
+    }
+    if (!(c[2] > 0.5)) return 0;
+    xn[0] = c[0] / c[2];
+    xn[1] = c[1] / c[2];
+    return fabs(xn[0]) < 0.6 && fabs(xn[1]) < 0.45;
+}
+
+static void scene(sfd_prng_t *rng) {
+    for (int i = 0; i < NPTS; ++i) {
+        const double a = 2.0 * M_PI * sfd_prng_uniform(rng);
+        g_pts[i][0] = 6.0 * cos(a);
+        g_pts[i][1] = 6.0 * sin(a);
+        g_pts[i][2] = -2.0 + 6.0 * sfd_prng_uniform(rng);
+    }
+}
+
+typedef struct {
+    double nees_pose; /* 6-dof (position, global attitude) NEES at the end */
+    double nees_pos;
+    double pos_err_m;
+    int gated, used, frames;
+} run_result_t;
+
+/* A jump: from frame jump_frame on, track jump_track is 20 px off its point (locked onto another
+ * image point). */
+static void run_flight(uint64_t seed, double seconds, int first_estimates, int jump_track,
+                       int jump_frame, run_result_t *out) {
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, seed);
+    scene(&rng);
+    sfd_extrinsics_t ext;
+    extrinsics(&ext);
+    sfd_window_params_t prm;
+    assert_status(sfd_window_params_default(&prm), SFD_OK);
+    prm.first_estimates = first_estimates;
+    prm.use_depth_prior = 0;
+    assert_status(sfd_window_init(&g_w, &prm), SFD_OK);
+    /* Initial state drawn from P0 around the truth; true biases drawn from P0 too. */
+    pose_t x0;
+    truth(0.0, &x0);
+    double p[3], v[3], q[4], bg[3] = {0, 0, 0}, ba[3] = {0, 0, 0}, bg_true[3], ba_true[3];
+    double dth[3], dR[9], R0[9];
+    for (int k = 0; k < 3; ++k) {
+        p[k] = x0.p[k] + sqrt(prm.p0_diag[SFD_WINDOW_IDX_P + k]) * sfd_prng_gaussian(&rng);
+        v[k] = x0.v[k] + sqrt(prm.p0_diag[SFD_WINDOW_IDX_V + k]) * sfd_prng_gaussian(&rng);
+        dth[k] = sqrt(prm.p0_diag[SFD_WINDOW_IDX_THETA + k]) * sfd_prng_gaussian(&rng);
+        bg_true[k] = 0.01 + sqrt(prm.p0_diag[SFD_WINDOW_IDX_BG + k]) * sfd_prng_gaussian(&rng);
+        bg[k] = 0.01;
+        ba_true[k] = sqrt(prm.p0_diag[SFD_WINDOW_IDX_BA + k]) * sfd_prng_gaussian(&rng);
+    }
+    sfd_so3_exp(dth, dR);
+    mat_mul(dR, x0.R, R0); /* global error: R^ = Exp(-dtheta) R, drawn symmetric */
+    sfd_rotmat_to_quat(R0, q);
+    assert_status(sfd_window_start_at(&g_w, 0, p, v, q, bg, ba), SFD_OK);
+    const sfd_ekf_noise_t *nz = &prm.noise;
+    const int frames = (int)(seconds * 20.0 + 0.5);
+    sfd_window_obs_t obs[SFD_WINDOW_MAX_TRACKS];
+    sfd_window_result_t res;
+    memset(out, 0, sizeof *out);
+    for (int f = 1; f <= frames; ++f) {
+        for (int s = 0; s < IMU_PER_FRAME; ++s) {
+            const int i = (f - 1) * IMU_PER_FRAME + s;
+            pose_t a, b;
+            truth(i * kDt, &a);
+            truth((i + 1) * kDt, &b);
+            /* gyro: R_b = R_a Exp(w dt) exactly; accel: v_b = v_a + (R_a f + g) dt exactly */
+            double Rab[9], w[3], acc[3], dv[3];
+            mat_tmul(a.R, b.R, Rab);
+            sfd_so3_log(Rab, w);
+            for (int k = 0; k < 3; ++k) {
+                w[k] /= kDt;
+                dv[k] = (b.v[k] - a.v[k]) / kDt + (k == 2 ? nz->gravity_m_s2 : 0.0);
+            }
+            for (int k = 0; k < 3; ++k) {
+                acc[k] = 0.0;
+                for (int j = 0; j < 3; ++j) acc[k] += a.R[3 * j + k] * dv[j];
+            }
+            double gm[3], am[3];
+            for (int k = 0; k < 3; ++k) {
+                gm[k] = w[k] + bg_true[k] +
+                        nz->gyro_noise_rad_s_rthz / sqrt(kDt) * sfd_prng_gaussian(&rng);
+                am[k] = acc[k] + ba_true[k] +
+                        nz->accel_noise_m_s2_rthz / sqrt(kDt) * sfd_prng_gaussian(&rng);
+                bg_true[k] += nz->gyro_bias_rw_rad_s2_rthz * sqrt(kDt) * sfd_prng_gaussian(&rng);
+                ba_true[k] += nz->accel_bias_rw_m_s3_rthz * sqrt(kDt) * sfd_prng_gaussian(&rng);
+            }
+            assert_status(sfd_window_propagate(&g_w, gm, am, kDt), SFD_OK);
+        }
+        pose_t x;
+        truth(f * IMU_PER_FRAME * kDt, &x);
+        int n = 0;
+        for (int i = 0; i < NPTS && n < SFD_WINDOW_MAX_TRACKS; ++i) {
+            double xn[2];
+            if (!observe(&x, &ext, g_pts[i], xn)) continue;
+            if (i == jump_track && f >= jump_frame) xn[0] += 0.05; /* 20 px: another point */
+            memset(&obs[n], 0, sizeof obs[n]);
+            obs[n].track_id = 1000 + i;
+            obs[n].xn[0] = xn[0] + kSigmaXn * sfd_prng_gaussian(&rng);
+            obs[n].xn[1] = xn[1] + kSigmaXn * sfd_prng_gaussian(&rng);
+            obs[n].cov_xn[0] = obs[n].cov_xn[2] = kSigmaXn * kSigmaXn;
+            ++n;
+        }
+        assert_status(sfd_window_frame(&g_w, (int64_t)f * 50000, obs, n, &ext, &res), SFD_OK);
+        assert_status(res.update_status, SFD_OK);
+        out->gated += res.gated;
+        out->used += res.used;
+        for (int k = 0; k < res.num_gated_ids; ++k) {
+            if (res.gated_ids[k] == 1000 + jump_track) out->frames = f; /* when it was refused */
+        }
+    }
+    /* errors at the end: dp, dtheta (global: R = Exp(dtheta) R^) */
+    pose_t x;
+    truth(frames * IMU_PER_FRAME * kDt, &x);
+    double Rh[9], E[9], e[6];
+    sfd_quat_to_rotmat(g_w.q_ItoW, Rh);
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+            E[3 * r + c] = 0.0;
+            for (int k = 0; k < 3; ++k) E[3 * r + c] += x.R[3 * r + k] * Rh[3 * c + k];
+        }
+    }
+    sfd_so3_log(E, e + 3);
+    for (int k = 0; k < 3; ++k) e[k] = x.p[k] - g_w.p_IinW_m[k];
+    out->pos_err_m = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    /* NEES = e^T P^-1 e over (p, theta): Cholesky of the 6x6 block */
+    double S[6][6];
+    const int idx[6] = {0, 1, 2, 6, 7, 8};
+    double pv[3];
+    sfd_window_position_var(&g_w, pv); /* brings P up to date */
+    for (int r = 0; r < 6; ++r) {
+        for (int c = 0; c < 6; ++c) S[r][c] = g_w.P[idx[r]][idx[c]];
+    }
+    double L[6][6] = {{0}};
+    for (int j = 0; j < 6; ++j) {
+        double d = S[j][j];
+        for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+        assert_true(d > 0.0);
+        L[j][j] = sqrt(d);
+        for (int i = j + 1; i < 6; ++i) {
+            double s = S[i][j];
+            for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
+            L[i][j] = s / L[j][j];
+        }
+    }
+    double y[6] = {0}, nees = 0.0, nees3 = 0.0;
+    for (int i = 0; i < 6; ++i) {
+        double s = e[i];
+        for (int k = 0; k < i; ++k) s -= L[i][k] * y[k];
+        y[i] = s / L[i][i];
+        nees += y[i] * y[i];
+        if (i == 2) nees3 = nees;
+    }
+    out->nees_pose = nees;
+    out->nees_pos = nees3;
+}
+
+static void flight_stays_close_to_the_truth(void **state) {
+    (void)state;
+    run_result_t r;
+    run_flight(1, 20.0, 0, -1, 0, &r);
+    printf("  20 s, 25 m: position error %.3f m, tracks used %d, gated %d\n", r.pos_err_m, r.used,
+           r.gated);
+    assert_true(r.pos_err_m < 0.5); /* 2 % of the 25 m flown (measured 0.31 m) */
+    assert_true(r.used > 1000);
+    /* consistent tracks gated at about alpha = 1 % */
+    assert_true(r.gated < 0.04 * (r.used + r.gated));
+}
+
+/* 20 Monte Carlo runs of 30 s with the shipped Jacobians (current estimates): the sum of the
+ * position NEES at the end is chi2(60) for a consistent filter, the attitude's too; 95 % band.
+ * (First-estimate Jacobians fail this from the default initial uncertainty: position 22.6,
+ * attitude 17.0 against 2.02..4.16; core/docs/window_filter.md.) */
+static void pose_nees_is_inside_its_chi_square_band(void **state) {
+    (void)state;
+    SFD_REQ("issue16.nees_band");
+    enum { RUNS = 20 };
+    double sum = 0.0, sum3 = 0.0;
+    for (int k = 0; k < RUNS; ++k) {
+        run_result_t r;
+        run_flight(100 + (uint64_t)k, 30.0, 0, -1, 0, &r);
+        sum += r.nees_pose;
+        sum3 += r.nees_pos;
+    }
+    double lo = 0.0, hi = 0.0;
+    assert_status(sfd_chi2_quantile_upper(0.975, 3 * RUNS, &lo), SFD_OK);
+    assert_status(sfd_chi2_quantile_upper(0.025, 3 * RUNS, &hi), SFD_OK);
+    printf("  NEES means over %d runs: position %.2f, attitude %.2f (band %.2f..%.2f each)\n", RUNS,
+           sum3 / RUNS, (sum - sum3) / RUNS, lo / RUNS, hi / RUNS);
+    assert_true(sum3 >= lo && sum3 <= hi);
+    assert_true(sum - sum3 >= lo && sum - sum3 <= hi);
+}
+
+static void a_jumped_track_is_gated_and_does_not_pull(void **state) {
+    (void)state;
+    SFD_REQ("issue16.stale_landmark");
+    run_result_t clean, jumped;
+    /* the first visible point at frame 40 jumps then; find one that is visible */
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 7);
+    scene(&rng);
+    sfd_extrinsics_t ext;
+    extrinsics(&ext);
+    pose_t x;
+    truth(40 * IMU_PER_FRAME * kDt, &x);
+    int track = -1;
+    for (int i = 0; i < NPTS && track < 0; ++i) {
+        double xn[2];
+        pose_t xp;
+        truth(38 * IMU_PER_FRAME * kDt, &xp);
+        if (observe(&x, &ext, g_pts[i], xn) && observe(&xp, &ext, g_pts[i], xn)) track = i;
+    }
+    assert_true(track >= 0);
+    run_flight(7, 4.0, 0, -1, 0, &clean);
+    run_flight(7, 4.0, 0, track, 40, &jumped);
+    printf("  jump at frame 40 gated at frame %d; error %.3f m (clean %.3f m)\n", jumped.frames,
+           jumped.pos_err_m, clean.pos_err_m);
+    assert_true(jumped.frames >= 40 && jumped.frames <= 40 + SFD_MAX_WINDOW);
+    assert_true(jumped.pos_err_m < clean.pos_err_m + 0.02);
+}
+
+static void flagged_tracks_are_dropped_and_capacities_hold(void **state) {
+    (void)state;
+    sfd_window_params_t prm;
+    sfd_window_params_default(&prm);
+    assert_status(sfd_window_init(&g_w, &prm), SFD_OK);
+    sfd_extrinsics_t ext;
+    extrinsics(&ext);
+    sfd_window_result_t res;
+    sfd_window_obs_t obs[SFD_WINDOW_MAX_TRACKS];
+    memset(obs, 0, sizeof obs);
+    /* not started */
+    assert_status(sfd_window_frame(&g_w, 1, obs, 0, &ext, &res), SFD_ERR_STATE);
+    const double z[3] = {0, 0, 0}, q[4] = {1, 0, 0, 0};
+    assert_status(sfd_window_start_at(&g_w, 0, z, z, q, z, z), SFD_OK);
+    assert_status(sfd_window_frame(&g_w, 1, NULL, 1, &ext, &res), SFD_ERR_INVAL);
+    assert_status(sfd_window_frame(&g_w, 1, obs, SFD_WINDOW_MAX_TRACKS + 1, &ext, &res),
+                  SFD_ERR_INVAL);
+    for (int i = 0; i < SFD_WINDOW_MAX_TRACKS; ++i) {
+        obs[i].track_id = i;
+        obs[i].xn[0] = 0.001 * i;
+        obs[i].cov_xn[0] = obs[i].cov_xn[2] = 1e-6;
+    }
+    obs[3].track_id = 2;    /* duplicate id: counted, ignored */
+    obs[5].cov_xn[0] = NAN; /* bad value: counted, ignored */
+    assert_status(sfd_window_frame(&g_w, 1, obs, SFD_WINDOW_MAX_TRACKS, &ext, &res), SFD_OK);
+    assert_int_equal(res.added, SFD_WINDOW_MAX_TRACKS - 2);
+    assert_int_equal(res.overflow, 2);
+    assert_int_equal(g_w.num_tracks, SFD_WINDOW_MAX_TRACKS - 2);
+    /* frame 2: track 7 flagged, the others seen again */
+    obs[7].drop = 1;
+    assert_status(sfd_window_frame(&g_w, 2, obs, SFD_WINDOW_MAX_TRACKS, &ext, &res), SFD_OK);
+    assert_int_equal(res.dropped, 1);
+    assert_int_equal(g_w.num_tracks, SFD_WINDOW_MAX_TRACKS - 3);
+    /* the window never exceeds L clones, P's dimension stays 15 + 6 L */
+    obs[7].drop = 0;
+    for (int f = 3; f < 20; ++f) {
+        assert_status(sfd_window_frame(&g_w, f, obs, SFD_WINDOW_MAX_TRACKS, &ext, &res), SFD_OK);
+        assert_true(g_w.num_clones <= prm.window);
+    }
+    /* no motion at all: every due track is refused for lack of parallax, never used */
+    assert_int_equal(res.used, 0);
+    /* bad parameters */
+    prm.window = SFD_MAX_WINDOW + 1;
+    assert_status(sfd_window_init(&g_w, &prm), SFD_ERR_INVAL);
+    sfd_window_params_default(&prm);
+    prm.gate_alpha = 0.0;
+    assert_status(sfd_window_init(&g_w, &prm), SFD_ERR_INVAL);
+    sfd_window_params_default(&prm);
+    prm.noise.accel_noise_m_s2_rthz = NAN;
+    assert_status(sfd_window_init(&g_w, &prm), SFD_ERR_INVAL);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(flight_stays_close_to_the_truth),
+        cmocka_unit_test(pose_nees_is_inside_its_chi_square_band),
+        cmocka_unit_test(a_jumped_track_is_gated_and_does_not_pull),
+        cmocka_unit_test(flagged_tracks_are_dropped_and_capacities_hold),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
