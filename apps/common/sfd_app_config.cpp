@@ -195,11 +195,15 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
                      {"landmark_depth_var_m2", &nv.landmark_depth_var_m2},
                      {"landmark_max_age_s", &nv.landmark_max_age_s},
                      {"landmark_gate_alpha", &nv.landmark_gate_alpha},
-                     {"min_parallax_px", &nv.min_parallax_px}};
-        const char *fints[] = {"enabled", "gyro_bias_at_rest", "init_from_truth",
-                               "consider_position"};
-        int32_t *fint_dst[] = {&nv.enabled, &nv.gyro_bias_at_rest, &nv.init_from_truth,
-                               &nv.consider_position};
+                     {"min_parallax_px", &nv.min_parallax_px},
+                     {"window_gate_alpha", &nv.window_gate_alpha}};
+        const char *fints[] = {"enabled",           "gyro_bias_at_rest", "init_from_truth",
+                               "consider_position", "window_filter",     "window_size",
+                               "first_estimates"};
+        int32_t *fint_dst[] = {&nv.enabled,           &nv.gyro_bias_at_rest, &nv.init_from_truth,
+                               &nv.consider_position, &nv.window_filter,     &nv.window_size,
+                               &nv.first_estimates};
+        constexpr int kNumFints = static_cast<int>(sizeof fints / sizeof fints[0]);
         for (const std::string &key : flt.keys()) {
             bool found = key == "init_accel_bias_m_s2";
             for (const FKey &k : fnums) found = found || key == k.name;
@@ -229,7 +233,7 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
                 nv.init_accel_bias_m_s2[k] = d;
             }
         }
-        for (int k = 0; k < 4; ++k) {
+        for (int k = 0; k < kNumFints; ++k) {
             if (flt[fints[k]].empty()) continue;
             if (!read_int(flt[fints[k]], where(std::string("filter.") + fints[k]), &i, error)) {
                 return false;

@@ -271,9 +271,17 @@ static void process_frame(sfd_node_t *n, const sfd_frame_t *frame, int64_t inges
             sfd_assoc_select(&nv->assoc, &nv->ekf, &nv->ekf_cam, nv->prev_R_CtoW, nv->prev_p_CinW_m,
                              nv->matches, nm, &nv->result);
         const int64_t t2 = now_us(n);
-        const sfd_status_t s2 = (s1 == SFD_OK) ? sfd_assoc_apply(&nv->assoc, &nv->ekf, &nv->ekf_cam,
-                                                                 nv->matches, nm, &nv->result)
-                                               : s1;
+        /* The window filter makes the update itself (sfd_nav_finish): the association's update
+         * then runs on a copy, for its verdicts only. */
+        sfd_ekf_t *assoc_ekf = &nv->ekf;
+        if (n->cfg.nav.window_filter) {
+            nv->ekf_scratch = nv->ekf;
+            assoc_ekf = &nv->ekf_scratch;
+        }
+        const sfd_status_t s2 =
+            (s1 == SFD_OK)
+                ? sfd_assoc_apply(&nv->assoc, assoc_ekf, &nv->ekf_cam, nv->matches, nm, &nv->result)
+                : s1;
         const int64_t t3 = now_us(n);
         times.association_us = t2 - t1;
         times.update_us = t3 - t2;
@@ -299,7 +307,11 @@ static void process_frame(sfd_node_t *n, const sfd_frame_t *frame, int64_t inges
     for (int i = 0; i < frame->num_features; ++i) {
         n->final_status[i] = n->verdict.features[i].status;
     }
-    if (n->cfg.nav.enabled) sfd_nav_finish(&n->nav, frame, n->final_status);
+    if (n->cfg.nav.enabled) {
+        const int64_t t4 = now_us(n);
+        sfd_nav_finish(&n->nav, frame, n->final_status);
+        if (n->cfg.nav.window_filter) times.update_us += now_us(n) - t4;
+    }
     publish_results(n, frame, &times, t0);
     n->prev_frame_utime = frame->utime;
     n->have_prev_frame = 1;

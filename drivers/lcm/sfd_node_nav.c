@@ -17,7 +17,11 @@ void sfd_nav_config_default(sfd_nav_config_t *cfg) {
         cfg->p0_diag[SFD_EKF_IDX_BG + k] = 1e-4;
         cfg->p0_diag[SFD_EKF_IDX_BA + k] = 1e-2;
     }
-    cfg->init_rest_s = 0.5;
+    cfg->window_filter = 1;
+    cfg->window_size = SFD_MAX_WINDOW;
+    cfg->window_gate_alpha = 0.01;
+    cfg->first_estimates = 0;
+    cfg->init_rest_s = 1.0;
     cfg->gyro_bias_at_rest = 1;
     cfg->landmark_depth_var_m2 = 100.0;
     cfg->landmark_max_age_s = 2.0;
@@ -53,6 +57,27 @@ sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd
     for (int k = 0; k < 3; ++k) {
         if (!isfinite(cfg->init_accel_bias_m_s2[k])) return SFD_ERR_INVAL;
     }
+    if ((cfg->window_filter != 0 && cfg->window_filter != 1) ||
+        (cfg->first_estimates != 0 && cfg->first_estimates != 1)) {
+        return SFD_ERR_INVAL;
+    }
+    if (cfg->window_filter) {
+        sfd_window_params_t wp;
+        sfd_window_params_default(&wp);
+        wp.noise = cfg->noise;
+        wp.window = cfg->window_size;
+        wp.min_observations = wp.window < 3 ? wp.window : 3;
+        wp.gate_alpha = cfg->window_gate_alpha;
+        wp.first_estimates = cfg->first_estimates;
+        if (sfd_window_init(&nav->win, &wp) != SFD_OK) return SFD_ERR_INVAL;
+        sfd_rest_params_t rp;
+        sfd_rest_params_default(&rp);
+        rp.gravity_m_s2 = cfg->noise.gravity_m_s2;
+        if (sfd_rest_init(&nav->rest, &rp) != SFD_OK) return SFD_ERR_INVAL;
+    }
+    nav->win_gated = 0;
+    nav->win_used = 0;
+    memset(&nav->win_result, 0, sizeof nav->win_result);
     nav->cfg = *cfg;
     nav->params = *params;
     memset(&nav->ekf, 0, sizeof nav->ekf);
@@ -100,6 +125,36 @@ static void started(sfd_nav_t *nav, int64_t utime) {
     }
 }
 
+/* The window filter starts when the IMU of [t - init_rest_s, t] is at rest by the rest detector
+ * (blocks of its block_samples, as many whole blocks as the samples fill, up to its window; at
+ * least 2): gravity's direction and the gyro bias from that window, position 0, yaw 0. Not at
+ * rest: no start (not a rejection), the next frame tries again. */
+static int start_window_at_rest(sfd_nav_t *nav, const sfd_imu_sample_t *s, int32_t n,
+                                int64_t t_us) {
+    sfd_rest_params_t rp = nav->rest.p;
+    int32_t blocks = n / rp.block_samples;
+    if (blocks > SFD_REST_MAX_BLOCKS) blocks = SFD_REST_MAX_BLOCKS;
+    if (blocks < 2) return SFD_REJECT_NONE;
+    rp.window_blocks = blocks;
+    if (sfd_rest_init(&nav->rest, &rp) != SFD_OK) return SFD_REJECT_CORE;
+    const int32_t first = n - blocks * rp.block_samples;
+    for (int32_t i = first; i < n; ++i) {
+        (void)sfd_rest_push(&nav->rest, s[i].t_us, s[i].gyro_rad_s, s[i].accel_m_s2);
+    }
+    sfd_rest_result_t rr;
+    if (sfd_rest_evaluate(&nav->rest, &rr) != SFD_OK || !rr.ready || !rr.at_rest) {
+        return SFD_REJECT_NONE;
+    }
+    const double *bias =
+        nav->cfg.gyro_bias_at_rest ? rr.gyro_mean_rad_s : nav->params.gyro_bias_rad_s;
+    if (sfd_window_start_at_rest(&nav->win, t_us, rr.accel_mean_m_s2, bias) != SFD_OK ||
+        sfd_window_to_ekf(&nav->win, &nav->ekf) != SFD_OK) {
+        return SFD_REJECT_CORE;
+    }
+    started(nav, t_us);
+    return SFD_REJECT_NONE;
+}
+
 /* Starts the filter from the IMU of [t - init_rest_s, t] (SPEC: at rest, gravity direction). */
 static int start_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
                          sfd_imu_sample_t *scratch, int32_t cap) {
@@ -109,6 +164,7 @@ static int start_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_u
     /* Not yet init_rest_s of IMU before this frame: keep waiting (not a rejection). */
     if (r == SFD_REJECT_IMU_GAP || (r == SFD_REJECT_NONE && n < 2)) return SFD_REJECT_NONE;
     if (r != SFD_REJECT_NONE) return r;
+    if (nav->cfg.window_filter) return start_window_at_rest(nav, scratch, n, t_us);
     double f[3] = {0, 0, 0}, w[3] = {0, 0, 0};
     for (int32_t i = 0; i < n; ++i) {
         for (int k = 0; k < 3; ++k) {
@@ -142,6 +198,17 @@ void sfd_nav_truth(sfd_nav_t *nav, int64_t utime, const double p_m[3], const dou
     for (int k = 0; k < 3; ++k) v[k] = (p_m[k] - nav->truth0_p[k]) / dt;
     double q[4];
     memcpy(q, q_wxyz, sizeof q);
+    if (nav->cfg.window_filter) {
+        if (sfd_quat_normalize(q) != SFD_OK ||
+            sfd_window_start_at(&nav->win, utime, p_m, v, q, nav->params.gyro_bias_rad_s,
+                                nav->cfg.init_accel_bias_m_s2) != SFD_OK ||
+            sfd_window_to_ekf(&nav->win, &nav->ekf) != SFD_OK) {
+            nav->have_truth0 = 0;
+            return;
+        }
+        started(nav, utime);
+        return;
+    }
     if (sfd_quat_normalize(q) != SFD_OK ||
         sfd_ekf_init(&nav->ekf, &nav->cfg.noise, p_m, v, q, nav->params.gyro_bias_rad_s,
                      nav->cfg.init_accel_bias_m_s2, nav->cfg.p0_diag) != SFD_OK) {
@@ -172,14 +239,20 @@ int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
         if (t_end <= t) continue;
         const double dt = (double)(t_end - t) * 1e-6;
         if (dt > nav->cfg.noise.max_dt_s ||
-            sfd_ekf_propagate(&nav->ekf, scratch[i].gyro_rad_s, scratch[i].accel_m_s2, dt) !=
-                SFD_OK) {
+            (nav->cfg.window_filter
+                 ? sfd_window_propagate(&nav->win, scratch[i].gyro_rad_s, scratch[i].accel_m_s2, dt)
+                 : sfd_ekf_propagate(&nav->ekf, scratch[i].gyro_rad_s, scratch[i].accel_m_s2,
+                                     dt)) != SFD_OK) {
             nav->ready = 0;
             return (dt > nav->cfg.noise.max_dt_s) ? SFD_REJECT_IMU_GAP : SFD_REJECT_CORE;
         }
         t = t_end;
     }
     nav->ekf_utime = t_us;
+    if (nav->cfg.window_filter && sfd_window_to_ekf(&nav->win, &nav->ekf) != SFD_OK) {
+        nav->ready = 0;
+        return SFD_REJECT_CORE;
+    }
     return SFD_REJECT_NONE;
 }
 
@@ -220,6 +293,58 @@ static int32_t prev_index_find(const sfd_nav_t *nav, int64_t id) {
     return -1;
 }
 
+/* Covariance of normalized coordinates xn from isotropic pixel noise sigma through the camera
+ * model: J = d(xn)/d(uv) = (d(uv)/d(xn))^-1, Cov = sigma^2 J J^T (xx, xy, yy). 0 when the
+ * distortion Jacobian is singular or not finite. */
+static int pixel_noise_xn(const sfd_camera_t *cam, double sigma_px, const double xn[2],
+                          double cov[3]) {
+    double uv[2], F[4];
+    if (sfd_camera_distort(cam, xn, uv, F) != SFD_OK) return 0;
+    const double det = F[0] * F[3] - F[1] * F[2];
+    if (!(fabs(det) > 0.0) || !isfinite(det)) return 0;
+    const double J[4] = {F[3] / det, -F[1] / det, -F[2] / det, F[0] / det};
+    const double s2 = sigma_px * sigma_px;
+    cov[0] = s2 * (J[0] * J[0] + J[1] * J[1]);
+    cov[1] = s2 * (J[0] * J[2] + J[1] * J[3]);
+    cov[2] = s2 * (J[2] * J[2] + J[3] * J[3]);
+    return isfinite(cov[0]) && isfinite(cov[1]) && isfinite(cov[2]) && cov[0] > 0.0 &&
+           cov[2] > 0.0 && cov[0] * cov[2] - cov[1] * cov[1] > 0.0;
+}
+
+/* The window filter's frame: every feature with a coordinate, flagged when judged SPURIOUS (its
+ * track's observations are deleted); the tracks its gate refuses lose their landmark too, so the
+ * association methods do not score against it. Then the IMU state is read back. */
+static void window_frame(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *status) {
+    int32_t n = 0;
+    for (int32_t i = 0; i < frame->num_features && n < SFD_MAX_FEATURES; ++i) {
+        if (!nav->ok[i]) continue;
+        sfd_window_obs_t *o = &nav->win_obs[n++];
+        o->track_id = frame->features[i].track_id;
+        o->xn[0] = nav->xn[i][0];
+        o->xn[1] = nav->xn[i][1];
+        memcpy(o->cov_xn, nav->cov_xn[i], sizeof o->cov_xn);
+        o->depth_m = frame->features[i].depth_m;
+        o->depth_var_m2 = frame->features[i].depth_var_m2;
+        if (!(o->depth_var_m2 >= 0.0) || !isfinite(o->depth_var_m2) || !isfinite(o->depth_m)) {
+            o->depth_m = 0.0;
+            o->depth_var_m2 = 0.0;
+        }
+        o->drop = status[i] == SFD_VERDICT_SPURIOUS;
+    }
+    sfd_window_result_t *r = &nav->win_result;
+    if (sfd_window_frame(&nav->win, frame->utime, nav->win_obs, n, &nav->ekf_cam.ext, r) !=
+            SFD_OK ||
+        r->update_status != SFD_OK || sfd_window_to_ekf(&nav->win, &nav->ekf) != SFD_OK) {
+        nav->ready = 0; /* restart at rest later */
+        return;
+    }
+    nav->win_gated += r->gated;
+    nav->win_used += r->used;
+    for (int32_t k = 0; k < r->num_gated_ids; ++k) {
+        (void)sfd_landmark_remove(&nav->map, r->gated_ids[k]);
+    }
+}
+
 int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *frame,
                       const uint8_t *skip, const sfd_parity_t *parity) {
     nav->num_matches = 0;
@@ -231,6 +356,9 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
                                sfd_camera_undistort(cam, uv_raw, nav->xn[i], NULL) == SFD_OK);
         nav->uv[i][0] = cam->fx_px * nav->xn[i][0] + cam->cx_px;
         nav->uv[i][1] = cam->fy_px * nav->xn[i][1] + cam->cy_px;
+        if (nav->ok[i])
+            nav->ok[i] = (uint8_t)pixel_noise_xn(cam, nav->params.pixel_sigma_px, nav->xn[i],
+                                                 nav->cov_xn[i]);
     }
     if (!nav->cfg.enabled || !nav->ready || !nav->have_prev) return 0;
     for (int32_t i = 0; i < frame->num_features; ++i) {
@@ -255,6 +383,13 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *stat
     if (!nav->cfg.enabled || !nav->ready) {
         nav->have_prev = 0;
         return;
+    }
+    if (nav->cfg.window_filter) {
+        window_frame(nav, frame, status);
+        if (!nav->ready) {
+            nav->have_prev = 0;
+            return;
+        }
     }
     double R_CtoW[9], p_C[3], cov6[36];
     sfd_ekf_camera_pose(&nav->ekf, &nav->ekf_cam.ext, R_CtoW, p_C);

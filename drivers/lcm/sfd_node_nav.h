@@ -20,6 +20,8 @@
 
 #include <sfd/sfd.h>
 #include <sfd/sfd_landmarks.h>
+#include <sfd/sfd_rest.h>
+#include <sfd/sfd_window.h>
 
 #include "sfd_imu_ring.h"
 
@@ -33,6 +35,12 @@ extern "C" {
 /** Configuration of the navigation side (YAML section `filter`, apps/config/sfd.yaml). */
 typedef struct {
     int32_t enabled;              /**< 1: run the EKF (required by oprf, ransac1, ransacf, both) */
+    int32_t window_filter;        /**< 1: the sliding-window filter (sfd_window.h), started when
+                                       rest is detected (sfd_rest.h); 0: the single-state EKF
+                                       with self-built landmarks (sfd_ekf.h, older) */
+    int32_t window_size;          /**< clones L of the window filter, 2..SFD_MAX_WINDOW */
+    double window_gate_alpha;     /**< false-alarm rate of its per-track chi-square gate */
+    int32_t first_estimates;      /**< window filter: 1 first-estimate Jacobians, 0 current */
     sfd_ekf_noise_t noise;        /**< IMU noise densities */
     double p0_diag[SFD_EKF_DIM];  /**< initial variances, SFD_EKF_IDX_* order */
     double init_rest_s;           /**< IMU averaged at rest for the gravity start (s), > 0 */
@@ -63,7 +71,16 @@ void sfd_nav_config_default(sfd_nav_config_t *cfg);
 typedef struct {
     sfd_nav_config_t cfg;
     sfd_params_t params;
-    sfd_ekf_t ekf;
+    sfd_ekf_t ekf; /**< window_filter: the window filter's IMU state (sfd_window_to_ekf), read
+                        by the association methods, the landmark map and SFD_STATE */
+    sfd_ekf_t ekf_scratch; /**< window_filter: the association's update runs on this copy (its
+                                verdicts count; the window filter makes the update) */
+    sfd_window_t win;
+    sfd_window_result_t win_result; /**< of the last frame */
+    sfd_window_obs_t win_obs[SFD_MAX_FEATURES];
+    sfd_rest_t rest;
+    int64_t win_gated;   /**< tracks the window filter's gate refused since init */
+    int64_t win_used;    /**< tracks it used */
     int64_t ekf_utime;   /**< time the filter state refers to (us) */
     int32_t ready;       /**< 1 once started from gravity */
     int32_t starts;      /**< times the filter was (re)started */
@@ -82,6 +99,8 @@ typedef struct {
     double xn[SFD_MAX_FEATURES][2];          /**< normalized undistorted coordinates */
     double uv[SFD_MAX_FEATURES][2];          /**< undistorted pixels */
     uint8_t ok[SFD_MAX_FEATURES];            /**< undistortion succeeded */
+    double cov_xn[SFD_MAX_FEATURES][3]; /**< covariance of xn: pixel noise through the distortion
+                                             Jacobian (xx, xy, yy) */
     /* the previous frame (observations kept for the next frame's matches) */
     int32_t prev_n;
     int64_t prev_track[SFD_MAX_FEATURES];
