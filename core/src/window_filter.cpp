@@ -201,9 +201,10 @@ Eigen::Matrix<double, 2, 3, Eigen::RowMajor> proj_jacobian(const Vec3 &pc) {
     return J;
 }
 
-/// Triangulates a track over its clones (current estimates): the linear least-squares point of
-/// the rays (sum_k (I - b_k b_k^T)) p = sum_k (I - b_k b_k^T) c_k, or the depth prior's point when
-/// the rays are nearly parallel, then at most gauss_newton_iterations Gauss-Newton steps on the
+/// Triangulates a track over its clones (current estimates): from the depth prior's point when
+/// the track has one, else from the linear least-squares point of the rays
+/// (sum_k (I - b_k b_k^T)) p = sum_k (I - b_k b_k^T) c_k (refused when they are nearly parallel),
+/// then at most gauss_newton_iterations Gauss-Newton steps on the
 /// whitened reprojection errors plus the depth prior. False when the point is not finite or not
 /// within [min_depth_m, max_depth_m] in front of every clone.
 bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPose *pose,
@@ -221,11 +222,14 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
     Eigen::SelfAdjointEigenSolver<Mat3> es(A, Eigen::EigenvaluesOnly);
     const double lmin = es.eigenvalues()(0);
     Vec3 p;
-    if (lmin > 1e-6 && std::isfinite(lmin)) {
-        p = A.ldlt().solve(b);
-    } else if (depth_row) {
+    if (depth_row) {
+        // The depth prior is a measurement of the point; the rays' point is not, at low parallax
+        // (its depth is then set by the pixel noise, and Gauss-Newton from there may stop far
+        // from the optimum, which biases the linearization): start from the prior.
         p = pose[0].p_CinW +
             pose[0].R_WtoC.transpose() * (t.depth_m * Vec3(t.xn[0][0], t.xn[0][1], 1.0));
+    } else if (lmin > 1e-6 && std::isfinite(lmin)) {
+        p = A.ldlt().solve(b);
     } else {
         return false;
     }
