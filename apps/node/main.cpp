@@ -321,7 +321,7 @@ int main(int argc, char **argv) {
         }
     }
     sfd_node_flush(&g_node);
-    const sfd_node_counters_t &c = g_node.counters;
+    const sfd_node_counters_t &c = g_node.pipe.counters;
     std::printf(
         "sfd-node: stopped: %lld frames in, %lld processed (%lld untested), %lld IMU, "
         "%lld CAMERA_INFO, %ld publish failures\n",

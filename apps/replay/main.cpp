@@ -407,7 +407,7 @@ int run(int argc, char **argv) {
                                : !cfg.nav.enabled        ? "none"
                                : cfg.nav.init_from_truth ? "truth"
                                                          : "rest";
-    const sfd_node_counters_t &c = g_node.counters;
+    const sfd_node_counters_t &c = g_node.pipe.counters;
 
     if (score_only) {
         std::printf("sfd-replay %s: scoring the recorded %s and %s, %lld events\n", in_path,

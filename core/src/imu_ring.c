@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-#include "sfd_imu_ring.h"
+#include "sfd/sfd_imu_ring.h"
 
 #include <string.h>
 

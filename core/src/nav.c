@@ -1,10 +1,11 @@
 /* SPDX-License-Identifier: MIT */
-#include "sfd_node_nav.h"
+#include "sfd/sfd_nav.h"
 
 #include <math.h>
 #include <string.h>
 
-#include "sfd_lcm_codec.h"
+#include "sfd/sfd_chi2.h"
+#include "sfd/sfd_reject.h"
 
 void sfd_nav_config_default(sfd_nav_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);

@@ -11,14 +11,6 @@ static int all_finite(const double *v, int n) {
     return 1;
 }
 
-const char *sfd_reject_reason_str(int reason) {
-    static const char *const names[SFD_REJECT_NUM_REASONS] = {
-        "decode",         "count",   "nonfinite", "order",        "camera_id", "depth",
-        "no_camera_info", "imu_gap", "imu_late",  "imu_overflow", "capacity",  "core"};
-    if (reason < 0 || reason >= SFD_REJECT_NUM_REASONS) return "unknown";
-    return names[reason];
-}
-
 int sfd_lcm_decode_imu(const void *data, int size, sfd_imu_sample_t *out) {
     sfd_imu_t msg;
     if (data == NULL || size < 0 || out == NULL) return SFD_REJECT_DECODE;

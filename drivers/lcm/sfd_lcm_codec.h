@@ -5,8 +5,8 @@
  *        fixed-capacity types decode into caller-owned storage, and every check happens here,
  *        before the core sees anything (SPEC "LCM interface").
  *
- * Rejections carry a reason, numbered as timing_t's REJECT_* constants, so the node can count
- * them and publish the counts on SFD_TIMING.
+ * Rejections carry a reason (sfd/sfd_reject.h, numbered as timing_t's REJECT_* constants), so
+ * the node can count them and publish the counts on SFD_TIMING.
  */
 #ifndef SFD_LCM_CODEC_H
 #define SFD_LCM_CODEC_H
@@ -14,6 +14,7 @@
 #include <stdint.h>
 
 #include <sfd/sfd.h>
+#include <sfd/sfd_reject.h>
 
 #include "sfd_camera_info_t.h"
 #include "sfd_feature_frame_t.h"
@@ -24,28 +25,6 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/** Rejection reasons (identical to sfd_timing_t's REJECT_* constants). */
-typedef enum {
-    SFD_REJECT_NONE = -1,
-    SFD_REJECT_DECODE = 0,    /**< the buffer does not decode (short, corrupt, wrong type) */
-    SFD_REJECT_COUNT = 1,     /**< num_features outside [0, wire capacity] */
-    SFD_REJECT_NONFINITE = 2, /**< NaN/Inf where a number is required */
-    SFD_REJECT_ORDER = 3,     /**< utime not after the channel's previous message */
-    SFD_REJECT_CAMERA_ID = 4, /**< camera_id unknown (no CAMERA_INFO for it) */
-    SFD_REJECT_DEPTH =
-        5, /**< depth prior unusable (counted; the feature is kept as "unknown depth") */
-    SFD_REJECT_NO_CAMERA_INFO = 6, /**< features before any calibration */
-    SFD_REJECT_IMU_GAP = 7,        /**< IMU does not cover the frame interval */
-    SFD_REJECT_IMU_LATE = 8,       /**< waited too long for IMU */
-    SFD_REJECT_IMU_OVERFLOW = 9,   /**< IMU ring full: a sample a frame may need overwritten */
-    SFD_REJECT_CAPACITY = 10,      /**< more features than the core's SFD_MAX_FEATURES */
-    SFD_REJECT_CORE = 11,          /**< the core refused the frame (status code) */
-    SFD_REJECT_NUM_REASONS = 12
-} sfd_reject_reason_t;
-
-/** Name of a rejection reason ("decode", "count", ...); "unknown" out of range. */
-const char *sfd_reject_reason_str(int reason);
 
 /**
  * @brief Decodes an IMU message and validates it (finite values).

@@ -13,7 +13,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 static uint8_t g_buf[2 * SFD_NODE_MAX_MESSAGE];
 
 static void frames(int64_t t0, int count) {
-    const int32_t cam = g_fz_node.have_camera ? g_fz_node.camera_id : 0;
+    const int32_t cam = g_fz_node.pipe.have_camera ? g_fz_node.camera_id : 0;
     for (int k = 0; k < count; ++k) {
         const int64_t t = t0 + 50000 * (int64_t)k;
         fz_imu_until(t, 20);

@@ -13,7 +13,7 @@ static uint8_t g_buf[2 * SFD_NODE_MAX_MESSAGE];
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     fz_restore_primed(0);
     fz_handle(SFD_NODE_FEATURES, data, size);
-    const int64_t t = g_fz_node.last_utime[SFD_NODE_FEATURES];
+    const int64_t t = g_fz_node.pipe.last_frame_utime;
     fz_imu_until(t, 400);
     if (t <= INT64_MAX - 50000) {
         fz_imu_until(t + 50000, 20);

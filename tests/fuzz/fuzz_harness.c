@@ -128,6 +128,15 @@ int64_t fz_verdicts(void) {
     return g_chk.verdicts;
 }
 
+/* Frames the node's pipeline holds (waiting for IMU, or due: the node judges those at once). */
+static int fz_frames_held(const sfd_node_t *n) {
+    int held = 0;
+    for (int k = 0; k < SFD_PIPELINE_FRAME_SLOTS; ++k) {
+        held += n->pipe.slot_state[k] != SFD_PIPELINE_SLOT_FREE;
+    }
+    return held;
+}
+
 /* Counters as a flat array, for the monotonicity check. */
 enum { FZ_NCOUNT = SFD_REJECT_NUM_REASONS + 5 };
 static void counters_flat(const sfd_node_counters_t *c, int64_t out[FZ_NCOUNT]) {
@@ -141,7 +150,7 @@ static void counters_flat(const sfd_node_counters_t *c, int64_t out[FZ_NCOUNT]) 
 
 static void check_state(const sfd_node_counters_t *before, int64_t verdicts_before) {
     const sfd_node_t *n = &g_fz_node;
-    const sfd_node_counters_t *c = &n->counters;
+    const sfd_node_counters_t *c = &n->pipe.counters;
     int64_t a[FZ_NCOUNT], b[FZ_NCOUNT];
     counters_flat(before, a);
     counters_flat(c, b);
@@ -150,10 +159,10 @@ static void check_state(const sfd_node_counters_t *before, int64_t verdicts_befo
     FZ_CHECK(c->frames_processed == g_chk.verdicts);
     FZ_CHECK(c->frames_processed <= c->frames_in);
     FZ_CHECK(c->frames_untested <= c->frames_processed);
-    FZ_CHECK(n->ring.count >= 0 && n->ring.count <= SFD_IMU_RING_CAPACITY);
-    FZ_CHECK(n->ring.head >= 0 && n->ring.head < SFD_IMU_RING_CAPACITY);
+    FZ_CHECK(n->pipe.ring.count >= 0 && n->pipe.ring.count <= SFD_IMU_RING_CAPACITY);
+    FZ_CHECK(n->pipe.ring.head >= 0 && n->pipe.ring.head < SFD_IMU_RING_CAPACITY);
     /* a frame is owed a verdict exactly while it is pending */
-    FZ_CHECK(g_chk.count == (n->have_pending ? 1 : 0));
+    FZ_CHECK(g_chk.count == fz_frames_held(n));
     g_chk.timing_expected = 0; /* SFD_TIMING comes right after its verdict or not at all */
 }
 
@@ -167,8 +176,8 @@ static int expect_features(const void *data, size_t size, fz_expected_t *e) {
         m->num_features > SFD_MAX_FEATURES) {
         return 0;
     }
-    if (!n->have_camera || m->camera_id != n->camera_id) return 0;
-    if (m->utime <= n->last_utime[SFD_NODE_FEATURES]) return 0;
+    if (!n->pipe.have_camera || m->camera_id != n->camera_id) return 0;
+    if (m->utime <= n->pipe.last_frame_utime) return 0;
     e->utime = m->utime;
     e->camera_id = m->camera_id;
     e->num_features = m->num_features;
@@ -178,11 +187,11 @@ static int expect_features(const void *data, size_t size, fz_expected_t *e) {
 
 void fz_handle(sfd_node_input_t kind, const void *data, size_t size) {
     sfd_node_t *n = &g_fz_node;
-    const sfd_node_counters_t before = n->counters;
+    const sfd_node_counters_t before = n->pipe.counters;
     const int64_t verdicts_before = g_chk.verdicts;
-    const int had_camera = n->have_camera;
+    const int had_camera = n->pipe.have_camera;
     const int32_t camera_before = n->camera_id;
-    const int64_t last_features_before = n->last_utime[SFD_NODE_FEATURES];
+    const int64_t last_features_before = n->pipe.last_frame_utime;
     const int32_t size32 = size > (size_t)INT32_MAX ? INT32_MAX : (int32_t)size;
 
     int accept = 0;
@@ -198,18 +207,18 @@ void fz_handle(sfd_node_input_t kind, const void *data, size_t size) {
     sfd_node_handle(n, kind, data, size32);
 
     if (kind == SFD_NODE_FEATURES) {
-        const int accepted = n->last_utime[SFD_NODE_FEATURES] != last_features_before;
+        const int accepted = n->pipe.last_frame_utime != last_features_before;
         FZ_CHECK(accepted == accept);
-        if (accepted) FZ_CHECK(n->last_utime[SFD_NODE_FEATURES] == g_ff_check.utime);
-        FZ_CHECK(n->counters.frames_in == before.frames_in + 1);
+        if (accepted) FZ_CHECK(n->pipe.last_frame_utime == g_ff_check.utime);
+        FZ_CHECK(n->pipe.counters.frames_in == before.frames_in + 1);
     } else {
-        FZ_CHECK(n->counters.frames_in == before.frames_in);
+        FZ_CHECK(n->pipe.counters.frames_in == before.frames_in);
     }
-    FZ_CHECK(n->counters.imu_in == before.imu_in + (kind == SFD_NODE_IMU ? 1 : 0));
-    FZ_CHECK(n->counters.camera_info_in ==
+    FZ_CHECK(n->pipe.counters.imu_in == before.imu_in + (kind == SFD_NODE_IMU ? 1 : 0));
+    FZ_CHECK(n->pipe.counters.camera_info_in ==
              before.camera_info_in + (kind == SFD_NODE_CAMERA_INFO ? 1 : 0));
     if (had_camera) {
-        FZ_CHECK(n->have_camera);
+        FZ_CHECK(n->pipe.have_camera);
         FZ_CHECK(n->camera_id == camera_before); /* never switches cameras */
     }
     check_state(&before, verdicts_before);
@@ -217,10 +226,10 @@ void fz_handle(sfd_node_input_t kind, const void *data, size_t size) {
 
 void fz_flush(void) {
     sfd_node_t *n = &g_fz_node;
-    const sfd_node_counters_t before = n->counters;
+    const sfd_node_counters_t before = n->pipe.counters;
     const int64_t verdicts_before = g_chk.verdicts;
     sfd_node_flush(n);
-    FZ_CHECK(!n->have_pending);
+    FZ_CHECK(fz_frames_held(n) == 0);
     FZ_CHECK(g_chk.count == 0); /* every accepted frame has had its verdict */
     check_state(&before, verdicts_before);
 }
@@ -272,7 +281,7 @@ static uint8_t g_msg[SFD_NODE_MAX_MESSAGE * 2];
 
 void fz_imu_until(int64_t until_us, int max_samples) {
     const sfd_node_t *n = &g_fz_node;
-    int64_t t = n->last_utime[SFD_NODE_IMU];
+    int64_t t = n->pipe.last_imu_utime;
     if (t >= until_us) return;
     const uint64_t gap = (uint64_t)until_us - (uint64_t)t; /* t < until_us: no wrap */
     if (t == INT64_MIN || gap > (uint64_t)max_samples * 5000u) {
@@ -307,7 +316,7 @@ void fz_restore_primed(int pending_frame) {
         if (p) {
             fz_handle(SFD_NODE_FEATURES, g_msg,
                       (size_t)fz_encode_features(g_msg, sizeof g_msg, 1000000, 0, 20));
-            FZ_CHECK(g_fz_node.have_pending);
+            FZ_CHECK(fz_frames_held(&g_fz_node) == 1);
         }
         FZ_CHECK(g_chk.verdicts == 3);
         g_primed_node[p] = g_fz_node;

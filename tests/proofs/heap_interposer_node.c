@@ -89,11 +89,11 @@ int main(void) {
     printf(
         "node: 500 frames, %ld messages published, %lld frames processed, %lld decode "
         "rejections, %lu heap calls\n",
-        g_published, (long long)g_node.counters.frames_processed,
-        (long long)g_node.counters.rejected[SFD_REJECT_DECODE], calls);
+        g_published, (long long)g_node.pipe.counters.frames_processed,
+        (long long)g_node.pipe.counters.rejected[SFD_REJECT_DECODE], calls);
     CHECK(calls == 0);
-    CHECK(g_node.counters.frames_processed == 500);
-    CHECK(g_node.counters.frames_untested <= 2);
+    CHECK(g_node.pipe.counters.frames_processed == 500);
+    CHECK(g_node.pipe.counters.frames_untested <= 2);
     printf("%d passed, %d failed\n", g_failures == 0 ? 1 : 0, g_failures == 0 ? 0 : 1);
     return g_failures == 0 ? 0 : 1;
 }

@@ -6,7 +6,7 @@
 
 #include <string.h>
 
-#include "sfd_imu_ring.h"
+#include <sfd/sfd_imu_ring.h>
 
 static sfd_imu_ring_t g_ring;
 static sfd_imu_sample_t g_scratch[SFD_MAX_IMU_SAMPLES];

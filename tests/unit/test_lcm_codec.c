@@ -385,7 +385,7 @@ static imu_feed_t feed_node_imu_and_frames(double accel_z_m_s2) {
             f.last_frame_sample = i;
         }
     }
-    assert_true(g_node.ring.overwritten == f.samples - SFD_IMU_RING_CAPACITY);
+    assert_true(g_node.pipe.ring.overwritten == f.samples - SFD_IMU_RING_CAPACITY);
     return f;
 }
 
@@ -407,13 +407,13 @@ static void lcm_node_reports_imu_overflow_only_for_needed_samples(void **state) 
     (void)state;
     SFD_REQ("SFD-LCM-004");
     const imu_feed_t f = feed_node_imu_and_frames(9.81);
-    assert_true(g_node.ring.lost == 0);
-    assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == 0);
-    assert_true(g_node.nav.ready == 1);
+    assert_true(g_node.pipe.ring.lost == 0);
+    assert_true(g_node.pipe.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == 0);
+    assert_true(g_node.pipe.nav.ready == 1);
     assert_int_equal(g_verdicts, f.frames);
     const int newest_dropped = feed_imu_past_the_ring(&f, 9.81);
-    assert_true(g_node.ring.lost == newest_dropped - f.last_frame_sample + 1);
-    assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == g_node.ring.lost);
+    assert_true(g_node.pipe.ring.lost == newest_dropped - f.last_frame_sample + 1);
+    assert_true(g_node.pipe.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == g_node.pipe.ring.lost);
 }
 
 /* GIVEN a filter that cannot start at rest (the accelerometer reads no gravity) and keeps
@@ -424,14 +424,14 @@ static void lcm_node_waiting_filter_keeps_its_rest_window(void **state) {
     (void)state;
     SFD_REQ("SFD-LCM-004");
     const imu_feed_t f = feed_node_imu_and_frames(0.0);
-    assert_int_equal(g_node.nav.ready, 0);
-    assert_true(g_node.ring.lost == 0);
-    assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == 0);
+    assert_int_equal(g_node.pipe.nav.ready, 0);
+    assert_true(g_node.pipe.ring.lost == 0);
+    assert_true(g_node.pipe.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == 0);
     const int newest_dropped = feed_imu_past_the_ring(&f, 0.0);
     const int rest_samples = (int)(g_node.cfg.nav.init_rest_s * 1e6) / 5000; /* 100 at 0.5 s */
     const int first_needed = f.last_frame_sample - rest_samples;
-    assert_true(g_node.ring.lost == newest_dropped - first_needed + 1);
-    assert_true(g_node.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == g_node.ring.lost);
+    assert_true(g_node.pipe.ring.lost == newest_dropped - first_needed + 1);
+    assert_true(g_node.pipe.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == g_node.pipe.ring.lost);
 }
 
 static int64_t g_fake_now_us;
@@ -482,7 +482,7 @@ static void lcm_node_reports_its_send_time_as_publish_us(void **state) {
         handle_imu_at(5000 * (int64_t)i, 9.81);
         if (i % 10 == 0) handle_frame(5000 * (int64_t)i, 0);
     }
-    assert_int_equal(g_node.nav.ready, 1); /* the filter runs: verdict and state each frame */
+    assert_int_equal(g_node.pipe.nav.ready, 1); /* the filter runs: verdict and state each frame */
     assert_int_equal(g_last_timing.publish_us, 110);
     assert_int_equal(g_last_timing.total_us, 110);
 }
@@ -503,13 +503,13 @@ static void lcm_node_follows_first_camera_even_with_negative_id(void **state) {
     assert_status(sfd_node_init(&g_node, &cfg, keep_verdict, NULL, NULL), SFD_OK);
     g_verdicts = 0;
     handle_camera_info(-7);
-    assert_int_equal(g_node.have_camera, 1);
+    assert_int_equal(g_node.pipe.have_camera, 1);
     assert_int_equal(g_node.camera_id, -7);
     handle_camera_info(3);
     assert_int_equal(g_node.camera_id, -7);
-    assert_true(g_node.counters.rejected[SFD_REJECT_CAMERA_ID] == 1);
+    assert_true(g_node.pipe.counters.rejected[SFD_REJECT_CAMERA_ID] == 1);
     handle_frame(1000, 3);
-    assert_true(g_node.counters.rejected[SFD_REJECT_CAMERA_ID] == 2);
+    assert_true(g_node.pipe.counters.rejected[SFD_REJECT_CAMERA_ID] == 2);
     assert_int_equal(g_verdicts, 0);
     handle_frame(2000, -7);
     assert_int_equal(g_verdicts, 1);
@@ -519,7 +519,7 @@ static void lcm_node_follows_first_camera_even_with_negative_id(void **state) {
     cfg.camera_id = 5;
     assert_status(sfd_node_init(&g_node, &cfg, keep_verdict, NULL, NULL), SFD_OK);
     handle_camera_info(-1);
-    assert_int_equal(g_node.have_camera, 0);
+    assert_int_equal(g_node.pipe.have_camera, 0);
     handle_camera_info(5);
     assert_int_equal(g_node.camera_id, 5);
 }

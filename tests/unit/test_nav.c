@@ -1,10 +1,10 @@
 /* SPDX-License-Identifier: MIT */
-/* unit.node_nav: the node's navigation side (drivers/lcm/sfd_node_nav.h), its start from TRUTH. */
+/* unit.nav: the pipeline's navigation side (core/include/sfd/sfd_nav.h), its start from TRUTH. */
 #include "sfd_test.h"
 
 #include <string.h>
 
-#include "sfd_node_nav.h"
+#include <sfd/sfd_nav.h>
 
 static sfd_nav_t g_nav;
 

@@ -9,9 +9,10 @@
 
 #include <stdint.h>
 
-#include <sfd/sfd.h>
-
-#include "sfd_lcm_codec.h"
+#include "sfd_imu.h"
+#include "sfd_parity.h"
+#include "sfd_reject.h"
+#include "sfd_rotation.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /**
- * @file sfd_node_nav.h
+ * @file sfd_nav.h
  * @brief The node's navigation side (SPEC "LCM interface"): the EKF started at rest from
  *        gravity and propagated with every IMU sample, the landmark map built from the tracks
  *        (first observation + depth prior, refined along the track), and the matches handed to
@@ -13,17 +13,18 @@
  *
  * Heap: none; all storage in sfd_nav_t (caller-owned, inside sfd_node_t).
  */
-#ifndef SFD_NODE_NAV_H
-#define SFD_NODE_NAV_H
+#ifndef SFD_NAV_H
+#define SFD_NAV_H
 
 #include <stdint.h>
 
-#include <sfd/sfd.h>
-#include <sfd/sfd_landmarks.h>
-#include <sfd/sfd_rest.h>
-#include <sfd/sfd_window.h>
-
+#include "sfd_assoc.h"
+#include "sfd_ekf.h"
 #include "sfd_imu_ring.h"
+#include "sfd_landmarks.h"
+#include "sfd_parity.h"
+#include "sfd_rest.h"
+#include "sfd_window.h"
 
 /** Slots of the previous frame's track index (load factor <= 1/2). */
 #define SFD_NAV_TRACK_SLOTS (2 * SFD_MAX_FEATURES + 1)
@@ -168,4 +169,4 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *stat
 }
 #endif
 
-#endif /* SFD_NODE_NAV_H */
+#endif /* SFD_NAV_H */

@@ -1,0 +1,425 @@
+/* SPDX-License-Identifier: MIT */
+/* The transport-free pipeline (sfd_pipeline.h): input ordering, the frame slots, and the three
+ * judgement stages over the IMU ring, the navigation side (nav.c) and the parity detector. */
+#include "sfd/sfd_pipeline.h"
+
+#include <stddef.h>
+#include <string.h>
+
+const char *sfd_reject_reason_str(int reason) {
+    static const char *const names[SFD_REJECT_NUM_REASONS] = {
+        "decode",         "count",   "nonfinite", "order",        "camera_id", "depth",
+        "no_camera_info", "imu_gap", "imu_late",  "imu_overflow", "capacity",  "core"};
+    if (reason < 0 || reason >= SFD_REJECT_NUM_REASONS) return "unknown";
+    return names[reason];
+}
+
+void sfd_pipeline_count_reject(sfd_pipeline_t *p, int reason) {
+    if (p != NULL && reason >= 0 && reason < SFD_REJECT_NUM_REASONS) p->counters.rejected[reason]++;
+}
+
+/* Bitwise equality of doubles (a republished calibration is bit-identical). */
+static int same_bits(const double *a, const double *b, int n) {
+    for (int i = 0; i < n; ++i) {
+        uint64_t x, y;
+        memcpy(&x, &a[i], sizeof x);
+        memcpy(&y, &b[i], sizeof y);
+        if (x != y) return 0;
+    }
+    return 1;
+}
+
+static int same_calibration(const sfd_camera_t *a, const sfd_camera_t *b,
+                            const sfd_extrinsics_t *ea, const sfd_extrinsics_t *eb) {
+    const double ka[4] = {a->fx_px, a->fy_px, a->cx_px, a->cy_px};
+    const double kb[4] = {b->fx_px, b->fy_px, b->cx_px, b->cy_px};
+    return a->model == b->model && a->width_px == b->width_px && a->height_px == b->height_px &&
+           same_bits(ka, kb, 4) && same_bits(a->dist, b->dist, 4) &&
+           same_bits(ea->R_CtoI, eb->R_CtoI, 9) && same_bits(ea->p_CinI, eb->p_CinI, 3);
+}
+
+void sfd_pipeline_config_default(sfd_pipeline_config_t *cfg) {
+    if (cfg == NULL) return;
+    memset(cfg, 0, sizeof *cfg);
+    sfd_params_default(&cfg->params);
+    sfd_nav_config_default(&cfg->nav);
+}
+
+sfd_status_t sfd_pipeline_init(sfd_pipeline_t *p, const sfd_pipeline_config_t *cfg) {
+    if (p == NULL || cfg == NULL) return SFD_ERR_INVAL;
+    const sfd_status_t v = sfd_params_validate(&cfg->params);
+    if (v != SFD_OK) return v;
+    const int32_t m = cfg->params.method;
+    const int needs_filter = m == SFD_METHOD_OPRF || m == SFD_METHOD_RANSAC1 ||
+                             m == SFD_METHOD_RANSACF || m == SFD_METHOD_BOTH;
+    if (needs_filter && !cfg->nav.enabled) return SFD_ERR_INVAL;
+    if (sfd_nav_init(&p->nav, &cfg->nav, &cfg->params) != SFD_OK) return SFD_ERR_INVAL;
+    p->cfg = *cfg;
+    memset(&p->counters, 0, sizeof p->counters);
+    sfd_imu_ring_init(&p->ring);
+    p->have_camera = 0;
+    p->last_imu_utime = INT64_MIN;
+    p->last_frame_utime = INT64_MIN;
+    p->prev_frame_utime = 0;
+    p->have_prev_frame = 0;
+    for (int k = 0; k < SFD_PIPELINE_FRAME_SLOTS; ++k) {
+        p->slot_state[k] = SFD_PIPELINE_SLOT_FREE;
+        p->slot_reason[k] = SFD_REJECT_NONE;
+        p->slot_seq[k] = 0;
+    }
+    p->next_seq = 0;
+    p->cur_slot = -1;
+    p->stage = 0;
+    p->nav_ok = 0;
+    p->num_matches = 0;
+    p->select_status = SFD_OK;
+    p->have_output = 0;
+    return SFD_OK;
+}
+
+int sfd_pipeline_set_camera(sfd_pipeline_t *p, const sfd_camera_t *cam,
+                            const sfd_extrinsics_t *ext) {
+    if (p == NULL || cam == NULL || ext == NULL) return SFD_REJECT_CORE;
+    if (p->have_camera && same_calibration(cam, &p->camera, ext, &p->ext)) {
+        return SFD_REJECT_NONE; /* periodic republication of the same calibration */
+    }
+    if (sfd_parity_init(&p->parity, &p->cfg.params, cam) != SFD_OK) {
+        sfd_pipeline_count_reject(p, SFD_REJECT_CORE);
+        return SFD_REJECT_CORE;
+    }
+    p->camera = *cam;
+    p->ext = *ext;
+    sfd_nav_set_camera(&p->nav, cam, ext);
+    p->have_camera = 1;
+    p->have_prev_frame = 0; /* a new calibration starts a new window */
+    return SFD_REJECT_NONE;
+}
+
+static int waiting_slot(const sfd_pipeline_t *p) {
+    for (int k = 0; k < SFD_PIPELINE_FRAME_SLOTS; ++k) {
+        if (p->slot_state[k] == SFD_PIPELINE_SLOT_WAITING) return k;
+    }
+    return -1;
+}
+
+static void make_due(sfd_pipeline_t *p, int slot, int reason) {
+    p->slot_state[slot] = SFD_PIPELINE_SLOT_DUE;
+    p->slot_reason[slot] = reason;
+}
+
+int sfd_pipeline_push_imu(sfd_pipeline_t *p, const sfd_imu_sample_t *s) {
+    if (p == NULL || s == NULL) return SFD_REJECT_DECODE;
+    if (s->t_us <= p->last_imu_utime) {
+        sfd_pipeline_count_reject(p, SFD_REJECT_ORDER);
+        return SFD_REJECT_ORDER;
+    }
+    p->last_imu_utime = s->t_us;
+    const int r = sfd_imu_ring_push(&p->ring, s);
+    sfd_pipeline_count_reject(p, r); /* overflow: stored, oldest dropped */
+    const int w = waiting_slot(p);
+    if (w >= 0 && s->t_us >= p->frames[w].utime) make_due(p, w, SFD_REJECT_NONE);
+    return r;
+}
+
+int sfd_pipeline_push_frame(sfd_pipeline_t *p, const sfd_frame_t *frame) {
+    if (p == NULL || frame == NULL) return SFD_REJECT_DECODE;
+    int r = SFD_REJECT_NONE;
+    if (!p->have_camera) {
+        r = SFD_REJECT_NO_CAMERA_INFO;
+    } else if (frame->num_features < 0 || frame->num_features > SFD_MAX_FEATURES) {
+        r = SFD_REJECT_CAPACITY;
+    } else if (frame->utime <= p->last_frame_utime) {
+        r = SFD_REJECT_ORDER;
+    }
+    if (r != SFD_REJECT_NONE) {
+        sfd_pipeline_count_reject(p, r);
+        return r;
+    }
+    /* The waiting frame's IMU never came before this frame: it is judged without motion. */
+    const int w = waiting_slot(p);
+    if (w >= 0) make_due(p, w, SFD_REJECT_IMU_LATE);
+    int slot = -1;
+    for (int k = 0; k < SFD_PIPELINE_FRAME_SLOTS && slot < 0; ++k) {
+        if (p->slot_state[k] == SFD_PIPELINE_SLOT_FREE) slot = k;
+    }
+    if (slot < 0) {
+        sfd_pipeline_count_reject(p, SFD_REJECT_CAPACITY);
+        return SFD_REJECT_CAPACITY;
+    }
+    p->last_frame_utime = frame->utime;
+    const size_t used =
+        offsetof(sfd_frame_t, features) + (size_t)frame->num_features * sizeof frame->features[0];
+    memcpy(&p->frames[slot], frame, used);
+    p->slot_seq[slot] = p->next_seq++;
+    /* Wait for the IMU (bounded: until the next frame or the end of input) when the frame needs
+     * it: for the parity motion from the previous frame, or for the filter. */
+    const int needs_imu = p->cfg.params.method != SFD_METHOD_NONE || p->cfg.nav.enabled;
+    const int has_interval = p->have_prev_frame || p->cfg.nav.enabled;
+    if (needs_imu && has_interval && sfd_imu_ring_newest(&p->ring) < frame->utime) {
+        p->slot_state[slot] = SFD_PIPELINE_SLOT_WAITING;
+        p->slot_reason[slot] = SFD_REJECT_NONE;
+    } else {
+        make_due(p, slot, SFD_REJECT_NONE);
+    }
+    return SFD_REJECT_NONE;
+}
+
+void sfd_pipeline_flush(sfd_pipeline_t *p) {
+    if (p == NULL) return;
+    const int w = waiting_slot(p);
+    if (w >= 0) make_due(p, w, SFD_REJECT_IMU_LATE);
+}
+
+/* The earliest IMU time a frame after the one at t_us can need: the parity motion starts at t_us,
+ * a running filter at its own time, a filter waiting to start at rest looks back init_rest_s
+ * from the next frame (so at most that far from t_us). Older samples may be overwritten without
+ * a loss (sfd_imu_ring_push). */
+static int64_t imu_needed_from(const sfd_pipeline_t *p, int64_t t_us) {
+    int64_t from = t_us;
+    const sfd_nav_t *nav = &p->nav;
+    if (p->cfg.nav.enabled && nav->ready && nav->ekf_utime < from) from = nav->ekf_utime;
+    if (p->cfg.nav.enabled && !nav->ready && !p->cfg.nav.init_from_truth) {
+        const int64_t rest_us = (int64_t)(p->cfg.nav.init_rest_s * 1e6);
+        from = (t_us > INT64_MIN + rest_us) ? t_us - rest_us : INT64_MIN;
+    }
+    return from;
+}
+
+void sfd_pipeline_truth(sfd_pipeline_t *p, int64_t utime, const double p_m[3],
+                        const double q_wxyz[4]) {
+    if (p == NULL || p_m == NULL || q_wxyz == NULL || !p->cfg.nav.init_from_truth) return;
+    sfd_nav_truth(&p->nav, utime, p_m, q_wxyz);
+    /* the filter may have started from a TRUTH older than the last frame */
+    if (p->ring.need_known) { /* a frame was judged, at prev_frame_utime */
+        sfd_imu_ring_set_needed(&p->ring, imu_needed_from(p, p->prev_frame_utime));
+    }
+}
+
+int32_t sfd_pipeline_frames_due(const sfd_pipeline_t *p) {
+    if (p == NULL) return 0;
+    int32_t n = 0;
+    for (int k = 0; k < SFD_PIPELINE_FRAME_SLOTS; ++k) {
+        if (p->slot_state[k] == SFD_PIPELINE_SLOT_DUE) n++;
+    }
+    return n;
+}
+
+/* Every feature UNTESTED, stage none: the verdict of a frame the detector could not judge. */
+static void untested_verdict(sfd_verdict_t *v, const sfd_frame_t *frame) {
+    memset(v, 0, offsetof(sfd_verdict_t, features));
+    v->utime = frame->utime;
+    v->num_features = frame->num_features;
+    v->num_untested = frame->num_features;
+    for (int i = 0; i < frame->num_features; ++i) {
+        memset(&v->features[i], 0, sizeof v->features[i]);
+        v->features[i].track_id = frame->features[i].track_id;
+    }
+}
+
+static void recount(sfd_verdict_t *v) {
+    v->num_consistent = v->num_spurious = v->num_untested = 0;
+    for (int i = 0; i < v->num_features; ++i) {
+        if (v->features[i].status == SFD_VERDICT_CONSISTENT)
+            v->num_consistent++;
+        else if (v->features[i].status == SFD_VERDICT_SPURIOUS)
+            v->num_spurious++;
+        else
+            v->num_untested++;
+    }
+}
+
+/* The camera translation between the previous frame and this one from the filter (the previous
+ * frame's posterior and this frame's prior), in the previous camera frame (translation_known). */
+static void filter_translation(const sfd_nav_t *nav, sfd_frame_motion_t *motion) {
+    double R_CtoW[9], p_C[3];
+    sfd_ekf_camera_pose(&nav->ekf, &nav->ekf_cam.ext, R_CtoW, p_C);
+    const double *Rp = nav->prev_R_CtoW;
+    for (int r = 0; r < 3; ++r) {
+        motion->p_CcurInCprev_m[r] = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            motion->p_CcurInCprev_m[r] += Rp[3 * k + r] * (p_C[k] - nav->prev_p_CinW_m[k]);
+        }
+    }
+    motion->translation_known = 1;
+}
+
+/* The parity detector on the frame (methods PARITY and BOTH): verdict in p->out.verdict. */
+static void run_parity(sfd_pipeline_t *p, const sfd_frame_t *frame, int imu_reason) {
+    sfd_frame_motion_t motion;
+    const sfd_frame_motion_t *mp = NULL;
+    int reason = imu_reason;
+    const int filter_runs = p->cfg.nav.enabled && p->nav.ready;
+    if (p->have_prev_frame && reason == SFD_REJECT_NONE) {
+        /* the filter's gyro bias once it runs (estimated at rest and online), else the config's */
+        const double *bias = filter_runs ? p->nav.ekf.bg_rad_s : p->cfg.params.gyro_bias_rad_s;
+        reason = sfd_assemble_motion(&p->ring, &p->ext, bias, p->prev_frame_utime, frame->utime,
+                                     p->cfg.params.max_imu_gap_us, p->imu_scratch, &motion);
+        if (reason == SFD_REJECT_NONE) {
+            mp = &motion;
+            motion.translation_known = 0;
+            if (p->cfg.params.translation_known && filter_runs && p->nav.have_prev) {
+                filter_translation(&p->nav, &motion);
+            }
+        }
+    }
+    if (p->have_prev_frame && mp == NULL) {
+        /* No motion for this interval: the window cannot continue. Start a new one here. */
+        sfd_pipeline_count_reject(p, reason);
+        sfd_parity_reset(&p->parity);
+    }
+    if (sfd_parity_push_frame(&p->parity, frame, mp, &p->out.verdict) != SFD_OK) {
+        sfd_pipeline_count_reject(p, SFD_REJECT_CORE);
+        sfd_parity_reset(&p->parity);
+        untested_verdict(&p->out.verdict, frame);
+    }
+}
+
+sfd_status_t sfd_pipeline_detect(sfd_pipeline_t *p) {
+    if (p == NULL) return SFD_ERR_INVAL;
+    if (p->cur_slot >= 0) return SFD_ERR_STATE;
+    int slot = -1;
+    for (int k = 0; k < SFD_PIPELINE_FRAME_SLOTS; ++k) {
+        if (p->slot_state[k] != SFD_PIPELINE_SLOT_DUE) continue;
+        if (slot < 0 || (int32_t)(p->slot_seq[k] - p->slot_seq[slot]) < 0) slot = k;
+    }
+    if (slot < 0) return SFD_ERR_STATE;
+    p->cur_slot = slot;
+    p->have_output = 0;
+    const sfd_frame_t *frame = &p->frames[slot];
+    const int imu_reason = p->slot_reason[slot];
+    const int32_t method = p->cfg.params.method;
+    /* The filter first: its propagation needs the same IMU as the parity motion. */
+    p->nav_ok = 0;
+    if (p->cfg.nav.enabled && imu_reason == SFD_REJECT_NONE) {
+        const int r =
+            sfd_nav_advance(&p->nav, &p->ring, frame->utime, p->imu_scratch, SFD_MAX_IMU_SAMPLES);
+        sfd_pipeline_count_reject(p, r);
+        p->nav_ok = (r == SFD_REJECT_NONE) && p->nav.ready;
+    } else if (p->cfg.nav.enabled && p->nav.ready) {
+        p->nav.ready = 0; /* no IMU for this interval: restart from gravity later */
+    }
+    if (method == SFD_METHOD_PARITY || method == SFD_METHOD_BOTH) {
+        run_parity(p, frame, imu_reason);
+    } else {
+        untested_verdict(&p->out.verdict, frame);
+        if (method == SFD_METHOD_NONE) {
+            for (int i = 0; i < frame->num_features; ++i) {
+                p->out.verdict.features[i].status = SFD_VERDICT_CONSISTENT; /* accept all */
+            }
+        }
+    }
+    p->stage = 1;
+    return SFD_OK;
+}
+
+sfd_status_t sfd_pipeline_associate(sfd_pipeline_t *p) {
+    if (p == NULL) return SFD_ERR_INVAL;
+    if (p->cur_slot < 0 || p->stage != 1) return SFD_ERR_STATE;
+    const sfd_frame_t *frame = &p->frames[p->cur_slot];
+    const int32_t method = p->cfg.params.method;
+    p->num_matches = 0;
+    p->select_status = SFD_OK;
+    if (p->nav_ok) {
+        /* PARITY: the filter uses what parity accepted; BOTH: OPRF judges parity's survivors */
+        for (int i = 0; i < frame->num_features; ++i) {
+            const int8_t ps = p->out.verdict.features[i].status;
+            p->skip[i] = (uint8_t)((method == SFD_METHOD_PARITY && ps != SFD_VERDICT_CONSISTENT) ||
+                                   (method == SFD_METHOD_BOTH && ps == SFD_VERDICT_SPURIOUS));
+        }
+        /* parity undistorted this frame's features with the same camera: reuse them */
+        const int parity_ran = method == SFD_METHOD_PARITY || method == SFD_METHOD_BOTH;
+        sfd_nav_t *nv = &p->nav;
+        p->num_matches =
+            sfd_nav_build(nv, &p->camera, frame, p->skip, parity_ran ? &p->parity : NULL);
+        p->select_status =
+            sfd_assoc_select(&nv->assoc, &nv->ekf, &nv->ekf_cam, nv->prev_R_CtoW, nv->prev_p_CinW_m,
+                             nv->matches, p->num_matches, &nv->result);
+    }
+    p->stage = 2;
+    return SFD_OK;
+}
+
+/* The association's update and verdicts (stage 3, when the filter runs). */
+static void apply_association(sfd_pipeline_t *p, const sfd_frame_t *frame) {
+    const int32_t method = p->cfg.params.method;
+    sfd_nav_t *nv = &p->nav;
+    /* The window filter makes the update itself (sfd_nav_finish): the association's update then
+     * runs on a copy, for its verdicts only. */
+    sfd_ekf_t *assoc_ekf = &nv->ekf;
+    if (p->cfg.nav.window_filter) {
+        nv->ekf_scratch = nv->ekf;
+        assoc_ekf = &nv->ekf_scratch;
+    }
+    const sfd_status_t s1 = p->select_status;
+    const sfd_status_t s2 = (s1 == SFD_OK)
+                                ? sfd_assoc_apply(&nv->assoc, assoc_ekf, &nv->ekf_cam, nv->matches,
+                                                  p->num_matches, &nv->result)
+                                : s1;
+    if (s1 != SFD_OK || s2 != SFD_OK || nv->result.update_status != SFD_OK) {
+        sfd_pipeline_count_reject(p, SFD_REJECT_CORE);
+    }
+    if (s1 != SFD_OK || s2 != SFD_OK) return;
+    p->out.hypotheses_used = nv->result.hypotheses_used;
+    p->out.budget_exhausted = (int8_t)nv->result.budget_exhausted;
+    const int assoc_verdicts = method == SFD_METHOD_OPRF || method == SFD_METHOD_RANSAC1 ||
+                               method == SFD_METHOD_RANSACF || method == SFD_METHOD_BOTH;
+    for (int i = 0; assoc_verdicts && i < frame->num_features; ++i) {
+        const int32_t k = nv->feature_match[i];
+        sfd_feature_result_t *f = &p->out.verdict.features[i];
+        if (k < 0) continue; /* BOTH: parity's verdict stays; others: UNTESTED */
+        f->status = nv->result.status[k];
+        f->stage = nv->result.stage[k];
+        f->statistic = nv->result.statistic[k];
+    }
+}
+
+static void fill_state(sfd_pipeline_t *p) {
+    const sfd_ekf_t *e = &p->nav.ekf;
+    sfd_pipeline_output_t *o = &p->out;
+    o->has_state = p->cfg.nav.enabled && p->nav.ready;
+    for (int k = 0; k < 3; ++k) {
+        o->p_IinW_m[k] = e->p_IinW_m[k];
+        o->v_IinW_m_s[k] = e->v_IinW_m_s[k];
+        o->p_var_m2[k] = e->P[(SFD_EKF_IDX_P + k) * SFD_EKF_DIM + SFD_EKF_IDX_P + k];
+    }
+    for (int k = 0; k < 4; ++k) o->q_ItoW[k] = e->q_ItoW[k];
+}
+
+sfd_status_t sfd_pipeline_update(sfd_pipeline_t *p) {
+    if (p == NULL) return SFD_ERR_INVAL;
+    if (p->cur_slot < 0 || p->stage != 2) return SFD_ERR_STATE;
+    const int slot = p->cur_slot;
+    const sfd_frame_t *frame = &p->frames[slot];
+    p->out.hypotheses_used = 0;
+    p->out.budget_exhausted = 0;
+    if (p->nav_ok) apply_association(p, frame);
+    recount(&p->out.verdict);
+    for (int i = 0; i < frame->num_features; ++i) {
+        p->final_status[i] = p->out.verdict.features[i].status;
+    }
+    if (p->cfg.nav.enabled) sfd_nav_finish(&p->nav, frame, p->final_status);
+    fill_state(p);
+    p->counters.frames_processed++;
+    if (p->out.verdict.num_consistent + p->out.verdict.num_spurious == 0) {
+        p->counters.frames_untested++;
+    }
+    p->prev_frame_utime = frame->utime;
+    p->have_prev_frame = 1;
+    sfd_imu_ring_set_needed(&p->ring, imu_needed_from(p, frame->utime));
+    p->slot_state[slot] = SFD_PIPELINE_SLOT_FREE;
+    p->cur_slot = -1;
+    p->stage = 0;
+    p->have_output = 1;
+    return SFD_OK;
+}
+
+sfd_status_t sfd_pipeline_judge(sfd_pipeline_t *p) {
+    sfd_status_t s = sfd_pipeline_detect(p);
+    if (s == SFD_OK) s = sfd_pipeline_associate(p);
+    if (s == SFD_OK) s = sfd_pipeline_update(p);
+    return s;
+}
+
+const sfd_pipeline_output_t *sfd_pipeline_output(const sfd_pipeline_t *p) {
+    return (p != NULL && p->have_output) ? &p->out : NULL;
+}
