@@ -15,7 +15,6 @@ namespace sfd {
 namespace {
 
 constexpr int kImu = SFD_WINDOW_IMU_DIM;
-constexpr int kDim = SFD_MSCKF_DIM;
 constexpr int P_ = SFD_WINDOW_IDX_P, V_ = SFD_WINDOW_IDX_V, TH = SFD_WINDOW_IDX_THETA,
               BG = SFD_WINDOW_IDX_BG, BA = SFD_WINDOW_IDX_BA;
 
