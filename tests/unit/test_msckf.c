@@ -329,6 +329,32 @@ static void bad_sizes_and_degenerate_landmarks_are_status_codes(void **state) {
     assert_int_equal(g_stack.folded, 0);
 }
 
+/* GIVEN a covariance that is not positive semi-definite (rounding gone wrong upstream) WHEN the
+ * update would make a variance negative THEN it refuses with a status code and leaves P and dx
+ * unchanged (the check that replaces the Joseph form's guarantee). */
+static void update_refuses_a_negative_variance(void **state) {
+    (void)state;
+    assert_int_equal(sfd_msckf_stack_reset(&g_stack, 2), SFD_OK);
+    g_stack.used[0] = 1; /* one unit-noise row: T = [1 0], q = 0.5 */
+    g_stack.Tq[0][0] = 1.0;
+    g_stack.Tq[0][1] = 0.0;
+    g_stack.Tq[0][2] = 0.5;
+    g_stack.folded = 1;
+    g_P[0] = 1.0; /* P = [1 10; 10 1]: indefinite */
+    g_P[1] = 10.0;
+    g_P[D] = 10.0;
+    g_P[D + 1] = 1.0;
+    double dx[2] = {7.0, 7.0};
+    /* P'_22 = 1 - 10^2 / 2 < 0 */
+    assert_int_equal(sfd_msckf_update(&g_stack, g_P, dx, &g_work), SFD_ERR_NUMERIC);
+    assert_true(g_P[0] == 1.0 && g_P[1] == 10.0 && g_P[D] == 10.0 && g_P[D + 1] == 1.0);
+    assert_true(dx[0] == 7.0 && dx[1] == 7.0);
+    g_P[1] = g_P[D] = 0.5; /* positive definite: the same row updates */
+    assert_int_equal(sfd_msckf_update(&g_stack, g_P, dx, &g_work), SFD_OK);
+    assert_near(g_P[0], 0.5, 1e-15);             /* 1 - 1 / 2 */
+    assert_near(g_P[D + 1], 1.0 - 0.125, 1e-15); /* 1 - 0.5^2 / 2 */
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(projected_residual_is_orthogonal_to_the_landmark_jacobian),
@@ -336,6 +362,7 @@ int main(void) {
         cmocka_unit_test(gate_is_chi_square_for_consistent_tracks_whatever_the_landmark_error),
         cmocka_unit_test(compressed_update_equals_the_kalman_filter),
         cmocka_unit_test(bad_sizes_and_degenerate_landmarks_are_status_codes),
+        cmocka_unit_test(update_refuses_a_negative_variance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

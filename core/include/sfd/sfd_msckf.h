@@ -109,11 +109,11 @@ sfd_status_t sfd_msckf_stack_reset(sfd_msckf_stack_t *stack, int32_t n);
 sfd_status_t sfd_msckf_stack_fold(sfd_msckf_stack_t *stack, const sfd_msckf_track_t *track);
 
 /**
- * @brief The Kalman update (4) from the compressed rows: dx (n values) and P in place (Joseph
- *        form, symmetrized). With no row folded, dx = 0 and P is unchanged.
+ * @brief The Kalman update (4) from the compressed rows: dx (n values) and P in place
+ *        (P - K (P T^T)^T, symmetrized). With no row folded, dx = 0 and P is unchanged.
  * @param P row stride SFD_MSCKF_DIM, n x n, symmetric positive semi-definite.
- * @return SFD_OK; SFD_ERR_INVAL (null); SFD_ERR_NUMERIC when S is not positive definite or the
- *         result is not finite (P and dx unchanged).
+ * @return SFD_OK; SFD_ERR_INVAL (null); SFD_ERR_NUMERIC when S is not positive definite, the
+ *         result is not finite or a variance would become negative (P and dx unchanged).
  */
 sfd_status_t sfd_msckf_update(const sfd_msckf_stack_t *stack, double *P, double *dx,
                               sfd_msckf_work_t *work);
