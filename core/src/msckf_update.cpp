@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The measurement side of the sliding-window filter (sfd_msckf.h, core/docs/msckf.md): null-space
-// projection of a track (eq. (2)), its chi-square statistic (eq. (3)), the incremental QR
-// compression of the accepted tracks and the Kalman update from it (eq. (4)).
+// projection of a track (eq. (2)), its chi-square statistic (eq. (3)), the compression of the
+// accepted tracks (normal equations, factored once) and the Kalman update from it (eq. (4)).
 #include "core_private.hpp"
 #include "sfd/sfd_msckf.h"
 #include "small_linalg.hpp"
@@ -213,31 +213,18 @@ extern "C" sfd_status_t sfd_msckf_stack_fold(sfd_msckf_stack_t *s, const sfd_msc
     for (int i = 0; i < m; ++i) {
         if (!all_finite(W[i], std::size_t(n) + 1)) return SFD_ERR_NUMERIC;
     }
-    // Each row into the triangle: at column k, a row without pivot k takes the rest of the row;
-    // otherwise a rotation with the pivot row zeroes the entry. What is left in the q column after
-    // every column is the row's part the triangle cannot explain.
+    // Each whitened row w (with its residual w_n) into the normal equations over its span:
+    // Y += w w^T (upper triangle), b += w w_n, and the residual's square into residual_ss.
     for (int i = 0; i < m; ++i) {
-        double *v = W[i];
-        bool placed = false;
-        for (int k = 0; k < n && !placed; ++k) {
-            if (!(std::fabs(v[k]) > 0.0)) continue;
-            if (s->used[k] == 0) {
-                for (int j = 0; j < k; ++j) s->Tq[k][j] = 0.0;
-                for (int j = k; j <= n; ++j) s->Tq[k][j] = v[j];
-                s->used[k] = 1;
-                placed = true;
-                break;
-            }
-            double c = 1.0, sn = 0.0;
-            givens(s->Tq[k][k], v[k], &c, &sn);
-            for (int j = k; j <= n; ++j) {
-                const double a = s->Tq[k][j], b = v[j];
-                s->Tq[k][j] = c * a + sn * b;
-                v[j] = -sn * a + c * b;
-            }
-            v[k] = 0.0;
+        const double *v = W[i];
+        for (int a = lo; a < hi; ++a) {
+            if (!(std::fabs(v[a]) > 0.0)) continue;
+            s->used[a] = 1;
+            double *row = s->Tq[a];
+            for (int c = a; c < hi; ++c) row[c] += v[a] * v[c];
+            row[n] += v[a] * v[n];
         }
-        if (!placed) s->residual_ss += v[n] * v[n];
+        s->residual_ss += v[n] * v[n];
         ++s->folded;
     }
     return SFD_OK;
@@ -249,15 +236,34 @@ extern "C" sfd_status_t sfd_msckf_update(const sfd_msckf_stack_t *s, double *P, 
         return SFD_ERR_INVAL;
     }
     const int n = s->n;
-    // The compressed rows H (k x n) and q: the triangle's rows that hold a pivot, in w->A.
+    // The compressed rows: Y = U^T U (Cholesky, row by row over the touched columns), q = U^-T b.
+    // U's rows (k <= n, in w->A) with unit noise carry exactly the information of every folded
+    // row (the R factor of their QR decomposition, up to signs). A pivot that has lost all but
+    // 1e-12 of its column's diagonal is a direction the rows do not observe (the window's gauge,
+    // for one): that row is dropped, which the exact factor would have zero.
     int k = 0;
     double q[kDim];
-    for (int i = 0; i < n; ++i) {
-        if (s->used[i] == 0) continue;
-        for (int j = 0; j < n; ++j) w->A[k][j] = s->Tq[i][j];
-        q[k] = s->Tq[i][n];
+    for (int c = 0; c < n; ++c) {
+        if (s->used[c] == 0) continue;
+        const double ycc = s->Tq[c][c];
+        double d = ycc;
+        for (int r = 0; r < k; ++r) d -= w->A[r][c] * w->A[r][c];
+        if (!(d > 1e-12 * ycc) || !(ycc > 0.0)) continue;
+        const double u = std::sqrt(d);
+        double *row = w->A[k];
+        for (int j = 0; j < c; ++j) row[j] = 0.0;
+        row[c] = u;
+        for (int j = c + 1; j < n; ++j) {
+            double v = s->Tq[c][j];
+            for (int r = 0; r < k; ++r) v -= w->A[r][c] * w->A[r][j];
+            row[j] = v / u;
+        }
+        double v = s->Tq[c][n];
+        for (int r = 0; r < k; ++r) v -= w->A[r][c] * q[r];
+        q[k] = v / u;
         ++k;
     }
+
     if (k == 0) {
         for (int i = 0; i < n; ++i) dx[i] = 0.0;
         return SFD_OK;

@@ -218,10 +218,13 @@ static void gate_is_chi_square_for_consistent_tracks_whatever_the_landmark_error
 
 /* The compressed update equals the Kalman filter with every projected row stacked:
  * S = H P H^T + R (block diagonal), K = P H^T S^-1, dx = K r, P' = (I - K H) P. */
-static void compressed_update_equals_the_kalman_filter(void **state) {
-    (void)state;
+/* The compressed update against the textbook Kalman update with every projected row stacked.
+ * gauge = 1: the rows never touch the first 6 columns (as a track never touches the IMU state)
+ * and are orthogonal to one direction of the others (as the window's gauge), so the normal
+ * equations are singular and the compression must drop those directions. */
+static void check_update_against_kalman(uint64_t seed, int gauge) {
     sfd_prng_t rng;
-    sfd_prng_seed(&rng, 14);
+    sfd_prng_seed(&rng, seed);
     const int n = 21, tracks = 6;
     random_spd(&rng, n, g_P);
     memcpy(g_P2, g_P, sizeof g_P);
@@ -231,6 +234,12 @@ static void compressed_update_equals_the_kalman_filter(void **state) {
     int m = 0;
     for (int t = 0; t < tracks; ++t) {
         random_track(&rng, 6 + t, n, &g_track);
+        for (int i = 0; gauge && i < g_track.rows; ++i) {
+            double dot = 0.0; /* v: 1 at columns 6, 9, ..., 18 */
+            for (int j = 0; j < 6; ++j) g_track.Hx[i][j] = 0.0;
+            for (int j = 6; j < n; j += 3) dot += g_track.Hx[i][j];
+            for (int j = 6; j < n; j += 3) g_track.Hx[i][j] -= dot / 5.0;
+        }
         for (int i = 0; i < g_track.rows; ++i) g_track.r[i] = sfd_prng_gaussian(&rng);
         assert_int_equal(sfd_msckf_track_project(&g_track), SFD_OK);
         assert_int_equal(sfd_msckf_stack_fold(&g_stack, &g_track), SFD_OK);
@@ -285,6 +294,20 @@ static void compressed_update_equals_the_kalman_filter(void **state) {
     assert_int_equal(sfd_msckf_update(&g_stack, g_P, dx, &g_work), SFD_OK);
     assert_memory_equal(g_P, g_P2, sizeof g_P);
     for (int i = 0; i < n; ++i) assert_true(dx[i] == 0.0);
+}
+
+static void compressed_update_equals_the_kalman_filter(void **state) {
+    (void)state;
+    check_update_against_kalman(14, 0);
+}
+
+/* GIVEN rows that leave the IMU columns untouched and share an unobserved direction (the
+ * normal equations are singular) WHEN compressed and updated THEN the result still equals the
+ * Kalman filter: the unobserved directions are dropped, not inverted. */
+static void compressed_update_equals_the_kalman_filter_when_directions_are_unobserved(
+    void **state) {
+    (void)state;
+    check_update_against_kalman(15, 1);
 }
 
 static void bad_sizes_and_degenerate_landmarks_are_status_codes(void **state) {
@@ -361,6 +384,7 @@ int main(void) {
         cmocka_unit_test(gate_equals_the_landmark_eliminated_statistic),
         cmocka_unit_test(gate_is_chi_square_for_consistent_tracks_whatever_the_landmark_error),
         cmocka_unit_test(compressed_update_equals_the_kalman_filter),
+        cmocka_unit_test(compressed_update_equals_the_kalman_filter_when_directions_are_unobserved),
         cmocka_unit_test(bad_sizes_and_degenerate_landmarks_are_status_codes),
         cmocka_unit_test(update_refuses_a_negative_variance),
     };

@@ -3,9 +3,9 @@
  * @file sfd_msckf.h
  * @brief The measurement side of a sliding-window (multi-state constraint) Kalman filter
  *        (Mourikis & Roumeliotis 2007; core/docs/msckf.md): one track's residual projected onto
- *        the left null space of its landmark Jacobian, its chi-square gate, the incremental QR
- *        compression of every accepted track into at most n rows, and the Kalman update from
- *        the compressed rows.
+ *        the left null space of its landmark Jacobian, its chi-square gate, the compression of
+ *        every accepted track into at most n rows (normal equations, factored once), and the
+ *        Kalman update from the compressed rows.
  *
  * A track seen in m clones of the window gives the linearized, stacked reprojection residual
  *
@@ -21,12 +21,12 @@
  *     gamma = r_o^T S_o^-1 r_o ~ chi2(rows - 3) for a consistent track,                (3)
  *
  * the parity-space test of Tornqvist et al. 2008 (Section III) with the translation known from
- * the filter and Cov(z) from its covariance. Accepted tracks are whitened by N^T R N and folded by
- * Givens rotations into an upper-triangular [T | q] of at most n rows (the least-squares
- * compression: the rows a rotation leaves outside the triangle carry no information on dx), and
- * the update (4) uses those rows with unit noise:
+ * the filter and Cov(z) from its covariance. Accepted tracks are whitened by N^T R N and folded
+ * into the normal equations (Y = sum w w^T, b = sum w r over the whitened rows w); the update
+ * factors Y = U^T U once (T = U, q = U^-T b: the least-squares compression into at most n rows)
+ * and uses those rows with unit noise:
  *
- *     S = T P T^T + I,  K = P T^T S^-1,  dx = K q,  P <- (I - K T) P (I - K T)^T + K K^T.  (4)
+ *     S = T P T^T + I,  K = P T^T S^-1,  dx = K q,  P <- P - K (P T^T)^T.                    (4)
  *
  * Every array has a fixed capacity (SFD_MSCKF_DIM, SFD_MSCKF_TRACK_ROWS); sizes beyond it are a
  * status code, never a write past an array. No heap, no global state, no recursion; the large
@@ -58,13 +58,13 @@ typedef struct {
     double R[SFD_MSCKF_TRACK_ROWS][SFD_MSCKF_TRACK_ROWS]; /**< noise covariance of r, SPD */
 } sfd_msckf_track_t;
 
-/** The incremental QR compression [T | q] of the accepted tracks of one update (caller-owned). */
+/** The accepted tracks of one update, folded into their normal equations (caller-owned). */
 typedef struct {
     int32_t n;          /**< error-state dimension */
     int32_t folded;     /**< whitened rows folded in since the reset */
-    double residual_ss; /**< sum of squares the triangle cannot explain (chi2(folded - rank)) */
-    uint8_t used[SFD_MSCKF_DIM];                 /**< 1: row k of the triangle holds a pivot */
-    double Tq[SFD_MSCKF_DIM][SFD_MSCKF_DIM + 1]; /**< row k: T's row with pivot k, then q_k */
+    double residual_ss; /**< sum of the whitened residuals' squares (r^T r over the rows) */
+    uint8_t used[SFD_MSCKF_DIM];                 /**< 1: some folded row touches column k */
+    double Tq[SFD_MSCKF_DIM][SFD_MSCKF_DIM + 1]; /**< row k: Y's upper triangle (k..n-1), b_k */
 } sfd_msckf_stack_t;
 
 /** Scratch of sfd_msckf_update() (caller-owned; no content is kept between calls). */
@@ -101,16 +101,19 @@ sfd_status_t sfd_msckf_track_gate(const sfd_msckf_track_t *track, const double *
 sfd_status_t sfd_msckf_stack_reset(sfd_msckf_stack_t *stack, int32_t n);
 
 /**
- * @brief Folds a projected track into [T | q]: whitens its rows by the Cholesky factor L of
- *        R_o (L^-1 H_o, L^-1 r_o: unit noise), then rotates each row into the triangle.
+ * @brief Folds a projected track into the normal equations: whitens its rows by the Cholesky
+ *        factor L of R_o (w = L^-1 [H_o | r_o]: unit noise), then Y += w w^T, b += w r over the
+ *        columns the track touches.
  * @return SFD_OK; SFD_ERR_INVAL (null, not projected, n differs from the stack's);
  *         SFD_ERR_NUMERIC when R_o is not positive definite (stack unchanged).
  */
 sfd_status_t sfd_msckf_stack_fold(sfd_msckf_stack_t *stack, const sfd_msckf_track_t *track);
 
 /**
- * @brief The Kalman update (4) from the compressed rows: dx (n values) and P in place
- *        (P - K (P T^T)^T, symmetrized). With no row folded, dx = 0 and P is unchanged.
+ * @brief The Kalman update (4): Y = U^T U (Cholesky over the touched columns; a pivot below
+ *        1e-12 of its diagonal is an unobserved direction and its row is dropped), T = U,
+ *        q = U^-T b, then dx (n values) and P in place (P - K (P T^T)^T, symmetrized). With no
+ *        row folded, dx = 0 and P is unchanged.
  * @param P row stride SFD_MSCKF_DIM, n x n, symmetric positive semi-definite.
  * @return SFD_OK; SFD_ERR_INVAL (null); SFD_ERR_NUMERIC when S is not positive definite, the
  *         result is not finite or a variance would become negative (P and dx unchanged).
