@@ -34,6 +34,28 @@ Vec3 v3(const double *p) {
     return Vec3(p[0], p[1], p[2]);
 }
 
+/// The transition of one IMU interval, eq. (5) of core/docs/window_filter.md: the identity plus
+/// these six 3x3 blocks (rows, columns): (p, v) = dt I, (p, theta), (p, ba), (v, theta),
+/// (v, ba), (theta, bg).
+struct TransitionBlocks {
+    double dt = 0.0;
+    Mat3 p_th, p_ba, v_th, v_ba, th_bg;
+};
+
+/// F X for a 15x15 X, from F's blocks: X plus six 3x15 block products (a fifth of the dense
+/// product's multiplications).
+template <typename M>
+Mat15 apply_transition(const TransitionBlocks &F, const M &X) {
+    Mat15 Y = X;
+    Y.template block<3, kImu>(P_, 0) += F.dt * X.template block<3, kImu>(V_, 0) +
+                                        F.p_th * X.template block<3, kImu>(TH, 0) +
+                                        F.p_ba * X.template block<3, kImu>(BA, 0);
+    Y.template block<3, kImu>(V_, 0) +=
+        F.v_th * X.template block<3, kImu>(TH, 0) + F.v_ba * X.template block<3, kImu>(BA, 0);
+    Y.template block<3, kImu>(TH, 0) += F.th_bg * X.template block<3, kImu>(BG, 0);
+    return Y;
+}
+
 Mat3 quat_rot(const double q[4]) {
     return Quat(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
 }
@@ -560,13 +582,13 @@ extern "C" sfd_status_t sfd_window_propagate(sfd_window_t *w, const double gyro_
     // chain exactly over steps (the null-space property of first-estimate Jacobians).
     const Vec3 fp = w->prm.first_estimates ? v3(w->fe_p_IinW_m) : p0;
     const Vec3 fv = w->prm.first_estimates ? v3(w->fe_v_IinW_m_s) : v0;
-    Mat15 F = Mat15::Identity();
-    F.block<3, 3>(P_, V_) = dt * Mat3::Identity();
-    F.block<3, 3>(P_, TH) = -skew(p1 - fp - fv * dt - 0.5 * dt * dt * g);
-    F.block<3, 3>(P_, BA) = -0.5 * dt * dt * R;
-    F.block<3, 3>(V_, TH) = -skew(v1 - fv - dt * g);
-    F.block<3, 3>(V_, BA) = -dt * R;
-    F.block<3, 3>(TH, BG) = -dt * R1;
+    TransitionBlocks F;
+    F.dt = dt;
+    F.p_th = -skew(p1 - fp - fv * dt - 0.5 * dt * dt * g);
+    F.p_ba = -0.5 * dt * dt * R;
+    F.v_th = -skew(v1 - fv - dt * g);
+    F.v_ba = -dt * R;
+    F.th_bg = -dt * R1;
     // Discrete noise: white accelerometer noise into v and p (with their correlation), white gyro
     // noise into theta (isotropic, so the rotation drops out), random walks into the biases.
     const sfd_ekf_noise_t &nz = w->prm.noise;
@@ -586,8 +608,9 @@ extern "C" sfd_status_t sfd_window_propagate(sfd_window_t *w, const double gyro_
     }
     Map15 Phi(&w->Phi[0][0]);
     Map15 Qd(&w->Qd[0][0]);
-    const Mat15 Phin = mul15(F, Phi);
-    const Mat15 Qn = mul15(mul15(F, Qd), F.transpose()) + Q;
+    const Mat15 Phin = apply_transition(F, Phi);
+    const Mat15 FQd = apply_transition(F, Qd);
+    const Mat15 Qn = apply_transition(F, FQd.transpose()) + Q;  // F Qd F^T = F (F Qd)^T
     if (!all_finite(p1.data(), 3) || !all_finite(v1.data(), 3) || !all_finite(R1.data(), 9) ||
         !all_finite(Phin.data(), Mat15::SizeAtCompileTime) ||
         !all_finite(Qn.data(), Mat15::SizeAtCompileTime)) {
