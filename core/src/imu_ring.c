@@ -72,10 +72,11 @@ int sfd_imu_ring_window(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us
 
 int sfd_assemble_motion(const sfd_imu_ring_t *ring, const sfd_extrinsics_t *ext,
                         const double gyro_bias_rad_s[3], int64_t t_prev_us, int64_t t_cur_us,
-                        int64_t max_gap_us, sfd_imu_sample_t *scratch, sfd_frame_motion_t *motion) {
+                        int64_t max_gap_us, sfd_imu_sample_t *scratch, int32_t cap,
+                        sfd_frame_motion_t *motion) {
     if (t_cur_us <= t_prev_us) return SFD_REJECT_ORDER;
     int32_t n = 0;
-    const int w = sfd_imu_ring_window(ring, t_prev_us, t_cur_us, scratch, SFD_MAX_IMU_SAMPLES, &n);
+    const int w = sfd_imu_ring_window(ring, t_prev_us, t_cur_us, scratch, cap, &n);
     if (w != SFD_REJECT_NONE) return w;
     double q[4], R_I[9], R_C[9];
     const sfd_status_t st =

@@ -230,92 +230,94 @@ extern "C" sfd_status_t sfd_msckf_stack_fold(sfd_msckf_stack_t *s, const sfd_msc
     return SFD_OK;
 }
 
-extern "C" sfd_status_t sfd_msckf_update(const sfd_msckf_stack_t *s, double *P, double *dx,
+extern "C" sfd_status_t sfd_msckf_update(sfd_msckf_stack_t *s, double *P, double *dx,
                                          sfd_msckf_work_t *w) {
     if (s == nullptr || P == nullptr || dx == nullptr || w == nullptr || s->n < 1 || s->n > kDim) {
         return SFD_ERR_INVAL;
     }
     const int n = s->n;
-    // The compressed rows: Y = U^T U (Cholesky, row by row over the touched columns), q = U^-T b.
-    // U's rows (k <= n, in w->A) with unit noise carry exactly the information of every folded
-    // row (the R factor of their QR decomposition, up to signs). A pivot that has lost all but
-    // 1e-12 of its column's diagonal is a direction the rows do not observe (the window's gauge,
-    // for one): that row is dropped, which the exact factor would have zero.
+    // The compressed rows, in place: Y = U^T U (Cholesky, row by row over the touched columns;
+    // row c of Tq becomes U's row with pivot c) and q = U^-T b (into Tq[c][n]). U's rows with unit
+    // noise carry exactly the information of every folded row (the R factor of their QR
+    // decomposition, up to signs). A pivot that has lost all but 1e-12 of its column's diagonal
+    // is a direction the rows do not observe (the window's gauge, for one): that row is dropped,
+    // which the exact factor would have zero.
     int k = 0;
-    double q[kDim];
+    int piv[kDim];  // the pivot column of each kept row
     for (int c = 0; c < n; ++c) {
         if (s->used[c] == 0) continue;
-        const double ycc = s->Tq[c][c];
+        double *row = s->Tq[c];
+        const double ycc = row[c];
         double d = ycc;
-        for (int r = 0; r < k; ++r) d -= w->A[r][c] * w->A[r][c];
-        if (!(d > 1e-12 * ycc) || !(ycc > 0.0)) continue;
+        for (int r = 0; r < k; ++r) d -= s->Tq[piv[r]][c] * s->Tq[piv[r]][c];
+        if (!(d > 1e-12 * ycc) || !(ycc > 0.0)) {
+            s->used[c] = 0;
+            continue;
+        }
         const double u = std::sqrt(d);
-        double *row = w->A[k];
-        for (int j = 0; j < c; ++j) row[j] = 0.0;
-        row[c] = u;
-        for (int j = c + 1; j < n; ++j) {
-            double v = s->Tq[c][j];
-            for (int r = 0; r < k; ++r) v -= w->A[r][c] * w->A[r][j];
+        for (int j = c + 1; j <= n; ++j) {  // the last column: b, becoming q
+            double v = row[j];
+            for (int r = 0; r < k; ++r) v -= s->Tq[piv[r]][c] * s->Tq[piv[r]][j];
             row[j] = v / u;
         }
-        double v = s->Tq[c][n];
-        for (int r = 0; r < k; ++r) v -= w->A[r][c] * q[r];
-        q[k] = v / u;
-        ++k;
+        row[c] = u;
+        piv[k++] = c;
     }
-
     if (k == 0) {
         for (int i = 0; i < n; ++i) dx[i] = 0.0;
         return SFD_OK;
     }
-    // B = P H^T (n x k); S = H P H^T + I (k x k).
+    // B = P T^T (n x k; T's row r is zero left of its pivot); S = T B + I (k x k).
     for (int i = 0; i < n; ++i) {
-        for (int j = 0; j < k; ++j) {
+        for (int r = 0; r < k; ++r) {
+            const double *t = s->Tq[piv[r]];
             double v = 0.0;
-            for (int l = 0; l < n; ++l) v += P[i * kDim + l] * w->A[j][l];
-            w->B[i][j] = v;
+            for (int l = piv[r]; l < n; ++l) v += P[i * kDim + l] * t[l];
+            w->B[i][r] = v;
         }
     }
-    for (int i = 0; i < k; ++i) {
-        for (int j = 0; j <= i; ++j) {
+    for (int r = 0; r < k; ++r) {
+        const double *t = s->Tq[piv[r]];
+        for (int c = 0; c <= r; ++c) {
             double v = 0.0;
-            for (int l = 0; l < n; ++l) v += w->A[i][l] * w->B[l][j];
-            w->S[i][j] = v + (i == j ? 1.0 : 0.0);
-            w->S[j][i] = w->S[i][j];
+            for (int l = piv[r]; l < n; ++l) v += t[l] * w->B[l][c];
+            w->S[r][c] = v + (r == c ? 1.0 : 0.0);
+            w->S[c][r] = w->S[r][c];
         }
     }
-    if (!la::cholesky(w->S, k, w->S)) return SFD_ERR_NUMERIC;  // S's factor in place
-    // K = P H^T S^-1: each row of K solves S K_i^T = B_i^T.
-    double dxn[kDim];
+    if (!la::cholesky(w->S, k, w->S)) return SFD_ERR_NUMERIC;  // S = L L^T, L in place
+    // With C = B L^-T (K = C L^-1) and z = L^-1 q: dx = K q = C z and
+    // P' = P - K S K^T = P - C C^T. For the optimal gain this equals the Joseph form
+    // (I - K T) P (I - K T)^T + K K^T at n^2 k / 2 products instead of about 2.5 n^3 (a fifth of
+    // a frame, callgrind). What the Joseph form guards against, a P that loses positive
+    // definiteness to rounding, is checked instead: a negative diagonal refuses the update.
+    double q[kDim], z[kDim], dxn[kDim];
+    for (int r = 0; r < k; ++r) q[r] = s->Tq[piv[r]][n];
+    la::forward_solve(w->S, k, q, z);
     for (int i = 0; i < n; ++i) {
-        la::chol_solve(w->S, k, w->B[i], w->K[i]);
+        la::forward_solve(w->S, k, w->B[i], w->B[i]);  // row i of C, in place
         double v = 0.0;
-        for (int j = 0; j < k; ++j) v += w->K[i][j] * q[j];
+        for (int r = 0; r < k; ++r) v += w->B[i][r] * z[r];
         dxn[i] = v;
     }
-    // P' = P - K S K^T = P - K B^T (B = P H^T), its lower triangle into w->A (H is no longer
-    // needed). Equal to the Joseph form (I - K H) P (I - K H)^T + K K^T for the optimal gain, at
-    // n^2 k / 2 products instead of about 2.5 n^3 (a fifth of a frame, callgrind). What the Joseph
-    // form guards against, a P that loses positive definiteness to rounding, is checked instead:
-    // a negative diagonal refuses the update.
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < n; ++i) {  // P' lower triangle into w->S (L is no longer needed)
         for (int j = 0; j <= i; ++j) {
             double v = 0.0;
-            for (int l = 0; l < k; ++l) v += w->K[i][l] * w->B[j][l];
-            w->A[i][j] = P[i * kDim + j] - v;
+            for (int r = 0; r < k; ++r) v += w->B[i][r] * w->B[j][r];
+            w->S[i][j] = P[i * kDim + j] - v;
         }
     }
     for (int i = 0; i < n; ++i) {
-        if (!all_finite(w->A[i], std::size_t(i) + 1) || !std::isfinite(dxn[i]) ||
-            !(w->A[i][i] >= 0.0)) {
+        if (!all_finite(w->S[i], std::size_t(i) + 1) || !std::isfinite(dxn[i]) ||
+            !(w->S[i][i] >= 0.0)) {
             return SFD_ERR_NUMERIC;
         }
     }
     for (int i = 0; i < n; ++i) {
         dx[i] = dxn[i];
         for (int j = 0; j <= i; ++j) {
-            P[i * kDim + j] = w->A[i][j];
-            P[j * kDim + i] = w->A[i][j];
+            P[i * kDim + j] = w->S[i][j];
+            P[j * kDim + i] = w->S[i][j];
         }
     }
     return SFD_OK;

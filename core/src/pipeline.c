@@ -253,7 +253,8 @@ static void run_parity(sfd_pipeline_t *p, const sfd_frame_t *frame, int imu_reas
         /* the filter's gyro bias once it runs (estimated at rest and online), else the config's */
         const double *bias = filter_runs ? p->nav.ekf.bg_rad_s : p->cfg.params.gyro_bias_rad_s;
         reason = sfd_assemble_motion(&p->ring, &p->ext, bias, p->prev_frame_utime, frame->utime,
-                                     p->cfg.params.max_imu_gap_us, p->imu_scratch, &motion);
+                                     p->cfg.params.max_imu_gap_us, p->imu_scratch,
+                                     SFD_PIPELINE_IMU_SCRATCH, &motion);
         if (reason == SFD_REJECT_NONE) {
             mp = &motion;
             motion.translation_known = 0;

@@ -135,7 +135,8 @@ static void imu_assemble_motion_matches_closed_form(void **state) {
     }
     sfd_frame_motion_t mo;
     const int64_t t0 = 101234, t1 = 151234;
-    assert_int_equal(sfd_assemble_motion(&g_ring, &ext, bias, t0, t1, 20000, g_scratch, &mo),
+    assert_int_equal(sfd_assemble_motion(&g_ring, &ext, bias, t0, t1, 20000, g_scratch,
+                                         SFD_MAX_IMU_SAMPLES, &mo),
                      SFD_REJECT_NONE);
     double phi[3], RI[9], expect[9];
     for (int k = 0; k < 3; ++k) phi[k] = w[k] * (t1 - t0) * 1e-6;
@@ -150,12 +151,12 @@ static void imu_assemble_motion_matches_closed_form(void **state) {
         sfd_imu_sample_t s = sample(5000 * (int64_t)i, 0, 0, 0.1);
         sfd_imu_ring_push(&g_ring, &s);
     }
-    assert_int_equal(
-        sfd_assemble_motion(&g_ring, &ext, bias, 140000, 190000, 20000, g_scratch, &mo),
-        SFD_REJECT_IMU_GAP);
-    assert_int_equal(
-        sfd_assemble_motion(&g_ring, &ext, bias, 190000, 140000, 20000, g_scratch, &mo),
-        SFD_REJECT_ORDER);
+    assert_int_equal(sfd_assemble_motion(&g_ring, &ext, bias, 140000, 190000, 20000, g_scratch,
+                                         SFD_MAX_IMU_SAMPLES, &mo),
+                     SFD_REJECT_IMU_GAP);
+    assert_int_equal(sfd_assemble_motion(&g_ring, &ext, bias, 190000, 140000, 20000, g_scratch,
+                                         SFD_MAX_IMU_SAMPLES, &mo),
+                     SFD_REJECT_ORDER);
 }
 
 int main(void) {

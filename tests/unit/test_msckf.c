@@ -352,17 +352,23 @@ static void bad_sizes_and_degenerate_landmarks_are_status_codes(void **state) {
     assert_int_equal(g_stack.folded, 0);
 }
 
+/* One unit-noise row w = [1 0] with residual 0.5 in a 2-state stack (Y = [1 0; 0 0], b = [0.5 0]):
+ * T = [1 0], q = 0.5. */
+static void fold_one_unit_row(void) {
+    assert_int_equal(sfd_msckf_stack_reset(&g_stack, 2), SFD_OK);
+    g_stack.used[0] = 1;
+    g_stack.Tq[0][0] = 1.0;
+    g_stack.Tq[0][1] = 0.0;
+    g_stack.Tq[0][2] = 0.5;
+    g_stack.folded = 1;
+}
+
 /* GIVEN a covariance that is not positive semi-definite (rounding gone wrong upstream) WHEN the
  * update would make a variance negative THEN it refuses with a status code and leaves P and dx
  * unchanged (the check that replaces the Joseph form's guarantee). */
 static void update_refuses_a_negative_variance(void **state) {
     (void)state;
-    assert_int_equal(sfd_msckf_stack_reset(&g_stack, 2), SFD_OK);
-    g_stack.used[0] = 1; /* one unit-noise row: T = [1 0], q = 0.5 */
-    g_stack.Tq[0][0] = 1.0;
-    g_stack.Tq[0][1] = 0.0;
-    g_stack.Tq[0][2] = 0.5;
-    g_stack.folded = 1;
+    fold_one_unit_row();
     g_P[0] = 1.0; /* P = [1 10; 10 1]: indefinite */
     g_P[1] = 10.0;
     g_P[D] = 10.0;
@@ -373,6 +379,7 @@ static void update_refuses_a_negative_variance(void **state) {
     assert_true(g_P[0] == 1.0 && g_P[1] == 10.0 && g_P[D] == 10.0 && g_P[D + 1] == 1.0);
     assert_true(dx[0] == 7.0 && dx[1] == 7.0);
     g_P[1] = g_P[D] = 0.5; /* positive definite: the same row updates */
+    fold_one_unit_row();   /* the update consumed the stack */
     assert_int_equal(sfd_msckf_update(&g_stack, g_P, dx, &g_work), SFD_OK);
     assert_near(g_P[0], 0.5, 1e-15);             /* 1 - 1 / 2 */
     assert_near(g_P[D + 1], 1.0 - 0.125, 1e-15); /* 1 - 0.5^2 / 2 */

@@ -76,13 +76,15 @@ int sfd_imu_ring_window(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us
  * @brief Camera motion between two frames for the detector: the IMU rotation integrated from the
  *        gyro (bias subtracted, ends interpolated) over [t_prev_us, t_cur_us], expressed for the
  *        camera through the extrinsics. Translation is left unknown.
- * @param scratch  caller storage for SFD_MAX_IMU_SAMPLES samples.
+ * @param scratch  caller storage for @p cap samples, 2..SFD_MAX_IMU_SAMPLES (the ring never
+ *                 holds more than SFD_IMU_RING_CAPACITY).
  * @return SFD_REJECT_NONE; the reasons of sfd_imu_ring_window(); SFD_REJECT_IMU_GAP also for a gap
  *         between samples larger than @p max_gap_us inside the interval.
  */
 int sfd_assemble_motion(const sfd_imu_ring_t *ring, const sfd_extrinsics_t *ext,
                         const double gyro_bias_rad_s[3], int64_t t_prev_us, int64_t t_cur_us,
-                        int64_t max_gap_us, sfd_imu_sample_t *scratch, sfd_frame_motion_t *motion);
+                        int64_t max_gap_us, sfd_imu_sample_t *scratch, int32_t cap,
+                        sfd_frame_motion_t *motion);
 
 #ifdef __cplusplus
 }

@@ -69,10 +69,8 @@ typedef struct {
 
 /** Scratch of sfd_msckf_update() (caller-owned; no content is kept between calls). */
 typedef struct {
-    double A[SFD_MSCKF_DIM][SFD_MSCKF_DIM];
-    double B[SFD_MSCKF_DIM][SFD_MSCKF_DIM];
-    double K[SFD_MSCKF_DIM][SFD_MSCKF_DIM];
-    double S[SFD_MSCKF_DIM][SFD_MSCKF_DIM];
+    double B[SFD_MSCKF_DIM][SFD_MSCKF_DIM]; /**< P T^T, then C = P T^T L^-T */
+    double S[SFD_MSCKF_DIM][SFD_MSCKF_DIM]; /**< T P T^T + I, then its factor L, then P' */
 } sfd_msckf_work_t;
 
 /**
@@ -113,12 +111,13 @@ sfd_status_t sfd_msckf_stack_fold(sfd_msckf_stack_t *stack, const sfd_msckf_trac
  * @brief The Kalman update (4): Y = U^T U (Cholesky over the touched columns; a pivot below
  *        1e-12 of its diagonal is an unobserved direction and its row is dropped), T = U,
  *        q = U^-T b, then dx (n values) and P in place (P - K (P T^T)^T, symmetrized). With no
- *        row folded, dx = 0 and P is unchanged.
+ *        row folded, dx = 0 and P is unchanged. The stack is consumed (U replaces Y in place):
+ *        reset it before folding again.
  * @param P row stride SFD_MSCKF_DIM, n x n, symmetric positive semi-definite.
  * @return SFD_OK; SFD_ERR_INVAL (null); SFD_ERR_NUMERIC when S is not positive definite, the
  *         result is not finite or a variance would become negative (P and dx unchanged).
  */
-sfd_status_t sfd_msckf_update(const sfd_msckf_stack_t *stack, double *P, double *dx,
+sfd_status_t sfd_msckf_update(sfd_msckf_stack_t *stack, double *P, double *dx,
                               sfd_msckf_work_t *work);
 
 #ifdef __cplusplus

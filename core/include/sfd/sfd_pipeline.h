@@ -47,6 +47,11 @@
 extern "C" {
 #endif
 
+/** IMU samples one frame interval (or the rest before the filter's start) may span: no more
+ *  than the ring holds, nor than the integrators take. */
+#define SFD_PIPELINE_IMU_SCRATCH \
+    (SFD_IMU_RING_CAPACITY < SFD_MAX_IMU_SAMPLES ? SFD_IMU_RING_CAPACITY : SFD_MAX_IMU_SAMPLES)
+
 /** Frames the pipeline holds between push_frame and the end of its judgement. */
 #define SFD_PIPELINE_FRAME_SLOTS 2
 
@@ -115,7 +120,7 @@ typedef struct {
     /* scratch */
     int8_t final_status[SFD_MAX_FEATURES];
     uint8_t skip[SFD_MAX_FEATURES];
-    sfd_imu_sample_t imu_scratch[SFD_MAX_IMU_SAMPLES];
+    sfd_imu_sample_t imu_scratch[SFD_PIPELINE_IMU_SCRATCH];
 } sfd_pipeline_t;
 
 /** @brief Defaults: sfd_params_default() and sfd_nav_config_default(). */
