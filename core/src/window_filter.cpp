@@ -760,16 +760,36 @@ extern "C" sfd_status_t sfd_window_to_ekf(sfd_window_t *w, sfd_ekf_t *ekf) {
     std::memcpy(ekf->ba_m_s2, w->ba_m_s2, sizeof ekf->ba_m_s2);
     ekf->noise = w->prm.noise;
     ekf->initialized = 1;
-    // dtheta_local = R^T dtheta_global: P_local = T P T^T with T = diag(I, I, R^T, I, I).
-    Mat15 T = Mat15::Identity();
-    T.block<3, 3>(TH, TH) = quat_rot(w->q_ItoW).transpose();
-    Mat15 P;
+    // dtheta_local = R^T dtheta_global: P_local = T P T^T with T = diag(I, I, R^T, I, I), i.e.
+    // the theta rows multiplied by R^T from the left, then the theta columns by R from the right
+    // (one 3 x 15 block at a time: no 15 x 15 temporaries on the stack).
+    const Mat3 R = quat_rot(w->q_ItoW);
+    double *Pl = ekf->P;
     for (int i = 0; i < kImu; ++i) {
-        for (int j = 0; j < kImu; ++j) P(i, j) = w->P[i][j];
+        for (int j = 0; j < kImu; ++j) Pl[i * kImu + j] = w->P[i][j];
     }
-    const Mat15 Pl = mul15(mul15(T, P), T.transpose());
+    for (int j = 0; j < kImu; ++j) {  // rows: (R^T P)_(theta, j)
+        double c[3];
+        for (int a = 0; a < 3; ++a) {
+            c[a] = 0.0;
+            for (int b = 0; b < 3; ++b) c[a] += R(b, a) * w->P[TH + b][j];
+        }
+        for (int a = 0; a < 3; ++a) Pl[(TH + a) * kImu + j] = c[a];
+    }
+    for (int i = 0; i < kImu; ++i) {  // columns: (X R)_(i, theta)
+        double c[3];
+        for (int a = 0; a < 3; ++a) {
+            c[a] = 0.0;
+            for (int b = 0; b < 3; ++b) c[a] += Pl[i * kImu + TH + b] * R(b, a);
+        }
+        for (int a = 0; a < 3; ++a) Pl[i * kImu + TH + a] = c[a];
+    }
     for (int i = 0; i < kImu; ++i) {
-        for (int j = 0; j < kImu; ++j) ekf->P[i * kImu + j] = 0.5 * (Pl(i, j) + Pl(j, i));
+        for (int j = i + 1; j < kImu; ++j) {
+            const double v = 0.5 * (Pl[i * kImu + j] + Pl[j * kImu + i]);
+            Pl[i * kImu + j] = v;
+            Pl[j * kImu + i] = v;
+        }
     }
     return SFD_OK;
 }
