@@ -1,12 +1,14 @@
 /* SPDX-License-Identifier: MIT */
 /**
  * @file fw_window.h
- * @brief The work of the Cortex-M7 firmware example: one parity window and one OPRF frame
- *        through the EKF on a synthetic constant scene, every core object in static storage.
+ * @brief The work of the Cortex-M7 firmware example: the whole pipeline (sfd_pipeline_t: IMU
+ *        ring, sliding-window filter started at rest, parity and OPRF, method `both`) fed 2.5 s
+ *        of a motionless camera over a constant scene, every core object in static storage.
  *
  * Target independent: the firmware image (main_m7.c) calls it once after reset, and the host
  * test example.firmware_window runs the same code and checks the verdicts, since qemu-user
- * cannot run an M-profile image.
+ * cannot run an M-profile image. The image is built against the core at SFD_MAX_FEATURES = 64
+ * and SFD_IMU_RING_CAPACITY = 512 (sfd_core_fw); the host test uses the default capacities.
  */
 #ifndef SFD_FW_WINDOW_H
 #define SFD_FW_WINDOW_H
@@ -17,31 +19,32 @@
 extern "C" {
 #endif
 
-/** Features of the synthetic scene (an 8 x 8 grid of landmarks 10 m in front of the camera). */
+/** Features of the synthetic scene (an 8 x 8 grid of points 10 m in front of the camera). */
 #define SFD_FW_FEATURES 64
+/** Frames fed at 20 Hz (the filter starts after 1 s at rest, then runs 1.5 s). */
+#define SFD_FW_FRAMES 50
 
-/** What the run decided (all counts over SFD_FW_FEATURES features). */
+/** What the run decided. */
 typedef struct {
-    int32_t status;            /**< first sfd_status_t other than SFD_OK, or SFD_OK */
-    int32_t frames_pushed;     /**< parity frames accepted (the window is SFD_MAX_WINDOW) */
-    uint32_t parity_flags;     /**< sfd_verdict_t.flags of the last frame */
-    int32_t parity_consistent; /**< verdicts of the last frame (window full) */
-    int32_t parity_spurious;
-    int32_t parity_untested;
-    int32_t assoc_consistent; /**< OPRF verdicts of the one association frame */
-    int32_t assoc_spurious;
-    int32_t assoc_untested;
-    int32_t assoc_update_status; /**< sfd_status_t of the EKF update inside the association */
+    int32_t status;          /**< first failure (sfd_status_t, or an sfd_reject_reason_t + 100
+                                  for a refused input), or SFD_OK */
+    int32_t frames_judged;   /**< frames with a verdict */
+    int32_t consistent;      /**< verdicts of the last frame */
+    int32_t spurious;
+    int32_t untested;
+    int32_t has_state;       /**< 1: the filter runs after the last frame */
+    int32_t tracks_used;     /**< tracks the window filter used since its start */
+    int32_t position_err_mm; /**< |position| after the last frame (mm; the camera never moves) */
 } sfd_fw_report_t;
 
 /**
- * @brief Runs the example once: initialises the parity detector (L = SFD_MAX_WINDOW, known zero
- *        translation), pushes SFD_MAX_WINDOW identical frames with identity motion, then starts
- *        the EKF at rest, propagates one IMU step at rest and runs OPRF on the same features.
- *        A motionless camera over a constant scene: every feature should be CONSISTENT.
+ * @brief Runs the example once: the pipeline (method both) gets a 200 Hz IMU at rest and
+ *        SFD_FW_FRAMES frames of the same SFD_FW_FEATURES points, and judges every frame.
+ *        A motionless camera over a constant scene: once tested, every feature should be
+ *        CONSISTENT, and the filter should stay where it started.
  * @param report out: the counts above (caller-owned).
- * @return SFD_OK or the first failing call's status (also in report->status). Not reentrant:
- *         the core objects are file-scope statics.
+ * @return SFD_OK or the first failure (also in report->status). Not reentrant: the core objects
+ *         are file-scope statics.
  */
 int32_t sfd_fw_run_window(sfd_fw_report_t *report);
 

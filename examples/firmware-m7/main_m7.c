@@ -24,7 +24,7 @@ int main(void) {
     (void)sfd_fw_run_window(&r);
     fw_report = r;
 #ifdef SFD_FW_CANARY
-    fw_canary_sink = sfd_fw_canary_deep(r.frames_pushed);
+    fw_canary_sink = sfd_fw_canary_deep(r.frames_judged);
 #endif
     return 0;
 }
