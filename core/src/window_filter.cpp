@@ -522,11 +522,17 @@ extern "C" sfd_status_t sfd_window_start_at_rest(sfd_window_t *w, int64_t utime,
     const sfd_status_t st =
         sfd_ekf_init_from_gravity(&tmp, &w->prm.noise, accel_m_s2, gyro_bias_rad_s, p0);
     if (st != SFD_OK) return st;
+    // At rest the specific force is gravity's magnitude along the measured direction, so the
+    // accelerometer bias is observable along that direction only: (|f| - g) f / |f|. Across it,
+    // a bias cannot be told from a tilt; it starts at 0.
+    const double fn = std::sqrt(accel_m_s2[0] * accel_m_s2[0] + accel_m_s2[1] * accel_m_s2[1] +
+                                accel_m_s2[2] * accel_m_s2[2]);
+    const double along = fn > 0.0 ? (fn - w->prm.noise.gravity_m_s2) / fn : 0.0;
     for (int k = 0; k < 3; ++k) {
         w->p_IinW_m[k] = 0.0;
         w->v_IinW_m_s[k] = 0.0;
         w->bg_rad_s[k] = gyro_bias_rad_s[k];
-        w->ba_m_s2[k] = 0.0;
+        w->ba_m_s2[k] = along * accel_m_s2[k];
     }
     std::memcpy(w->q_ItoW, tmp.q_ItoW, sizeof w->q_ItoW);
     start_common(w, utime);
