@@ -49,8 +49,19 @@ static void mat_tmul(const double A[9], const double B[9], double C[9]) { /* A^T
     }
 }
 
+/* Seconds at rest before the flight starts (0: the flight is under way at t = 0). With a rest,
+ * the flight's own time is tau(t) = 0 until g_rest_s, then s - T (1 - exp(-s / T)) with
+ * s = t - g_rest_s, T = 1 s: it starts from rest and reaches full speed in a few seconds. */
+static double g_rest_s = 0.0;
+
 /* The true trajectory: position, velocity (analytic) and R_ItoW at t. */
-static void truth(double t, pose_t *x) {
+static void truth(double t_in, pose_t *x) {
+    double t = t_in, rate = 1.0; /* tau and d tau / dt */
+    if (g_rest_s > 0.0) {
+        const double s = t_in - g_rest_s;
+        t = s > 0.0 ? s - (1.0 - exp(-s)) : 0.0;
+        rate = s > 0.0 ? 1.0 - exp(-s) : 0.0;
+    }
     const double w = 2.0 * M_PI / 10.0, r = 2.0;
     x->p[0] = r * cos(w * t);
     x->p[1] = r * sin(w * t);
@@ -58,6 +69,7 @@ static void truth(double t, pose_t *x) {
     x->v[0] = -r * w * sin(w * t);
     x->v[1] = r * w * cos(w * t);
     x->v[2] = 0.15 * cos(0.5 * t);
+    for (int k = 0; k < 3; ++k) x->v[k] *= rate;
     const double yaw = w * t + 0.2 * sin(0.9 * t);
     const double rz[3] = {0, 0, yaw}, ry[3] = {0, 0.1 * sin(0.7 * t), 0},
                  rx[3] = {0.1 * sin(1.3 * t), 0, 0};
@@ -116,8 +128,23 @@ typedef struct {
 
 /* A jump: from frame jump_frame on, track jump_track is 20 px off its point (locked onto another
  * image point). */
+static void run_flight_from(uint64_t seed, double seconds, int first_estimates, int jump_track,
+                            int jump_frame, int at_rest, run_result_t *out);
+
+/* A flight under way at t = 0, the filter started at the truth with errors drawn from P0. */
 static void run_flight(uint64_t seed, double seconds, int first_estimates, int jump_track,
                        int jump_frame, run_result_t *out) {
+    run_flight_from(seed, seconds, first_estimates, jump_track, jump_frame, 0, out);
+}
+
+/* at_rest = 1: 1 s at rest first; the filter starts at rest as the product does
+ * (sfd_window_start_at_rest from the mean IMU sample of that second), then the flight ramps up.
+ * The errors are then those of the estimated start, in the frame the start defines (origin at
+ * the start, yaw 0: the truth's own at tau = 0). */
+static void run_flight_from(uint64_t seed, double seconds, int first_estimates, int jump_track,
+                            int jump_frame, int at_rest, run_result_t *out) {
+    g_rest_s = at_rest ? 1.0 : 0.0;
+    const int rest_samples = at_rest ? 200 : 0;
     sfd_prng_t rng;
     sfd_prng_seed(&rng, seed);
     scene(&rng);
@@ -144,15 +171,32 @@ static void run_flight(uint64_t seed, double seconds, int first_estimates, int j
     sfd_so3_exp(dth, dR);
     mat_mul(dR, x0.R, R0); /* global error: R^ = Exp(-dtheta) R, drawn symmetric */
     sfd_rotmat_to_quat(R0, q);
-    assert_status(sfd_window_start_at(&g_w, 0, p, v, q, bg, ba), SFD_OK);
     const sfd_ekf_noise_t *nz = &prm.noise;
+    if (!at_rest) {
+        assert_status(sfd_window_start_at(&g_w, 0, p, v, q, bg, ba), SFD_OK);
+    } else { /* the rest second: white noise and biases on gravity, then the start */
+        double mg[3] = {0, 0, 0}, ma[3] = {0, 0, 0};
+        for (int i = 0; i < rest_samples; ++i) {
+            for (int k = 0; k < 3; ++k) {
+                mg[k] +=
+                    bg_true[k] + nz->gyro_noise_rad_s_rthz / sqrt(kDt) * sfd_prng_gaussian(&rng);
+                ma[k] += (k == 2 ? nz->gravity_m_s2 : 0.0) + ba_true[k] +
+                         nz->accel_noise_m_s2_rthz / sqrt(kDt) * sfd_prng_gaussian(&rng);
+            }
+        }
+        for (int k = 0; k < 3; ++k) {
+            mg[k] /= rest_samples;
+            ma[k] /= rest_samples;
+        }
+        assert_status(sfd_window_start_at_rest(&g_w, 1000000, ma, mg), SFD_OK);
+    }
     const int frames = (int)(seconds * 20.0 + 0.5);
     sfd_window_obs_t obs[SFD_WINDOW_MAX_TRACKS];
     sfd_window_result_t res;
     memset(out, 0, sizeof *out);
     for (int f = 1; f <= frames; ++f) {
         for (int s = 0; s < IMU_PER_FRAME; ++s) {
-            const int i = (f - 1) * IMU_PER_FRAME + s;
+            const int i = rest_samples + (f - 1) * IMU_PER_FRAME + s;
             pose_t a, b;
             truth(i * kDt, &a);
             truth((i + 1) * kDt, &b);
@@ -180,7 +224,7 @@ static void run_flight(uint64_t seed, double seconds, int first_estimates, int j
             assert_status(sfd_window_propagate(&g_w, gm, am, kDt), SFD_OK);
         }
         pose_t x;
-        truth(f * IMU_PER_FRAME * kDt, &x);
+        truth((rest_samples + f * IMU_PER_FRAME) * kDt, &x);
         int n = 0;
         for (int i = 0; i < NPTS && n < SFD_WINDOW_MAX_TRACKS; ++i) {
             double xn[2];
@@ -193,7 +237,9 @@ static void run_flight(uint64_t seed, double seconds, int first_estimates, int j
             obs[n].cov_xn[0] = obs[n].cov_xn[2] = kSigmaXn * kSigmaXn;
             ++n;
         }
-        assert_status(sfd_window_frame(&g_w, (int64_t)f * 50000, obs, n, &ext, &res), SFD_OK);
+        assert_status(sfd_window_frame(&g_w, (int64_t)rest_samples * 5000 + (int64_t)f * 50000, obs,
+                                       n, &ext, &res),
+                      SFD_OK);
         assert_status(res.update_status, SFD_OK);
         out->gated += res.gated;
         out->used += res.used;
@@ -203,7 +249,10 @@ static void run_flight(uint64_t seed, double seconds, int first_estimates, int j
     }
     /* errors at the end: dp, dtheta (global: R = Exp(dtheta) R^) */
     pose_t x;
-    truth(frames * IMU_PER_FRAME * kDt, &x);
+    truth((rest_samples + frames * IMU_PER_FRAME) * kDt, &x);
+    if (at_rest) { /* the start defines the origin: the truth's position at tau = 0 */
+        for (int k = 0; k < 3; ++k) x.p[k] -= x0.p[k];
+    }
     double Rh[9], E[9], e[6];
     sfd_quat_to_rotmat(g_w.q_ItoW, Rh);
     for (int r = 0; r < 3; ++r) {
@@ -245,6 +294,7 @@ static void run_flight(uint64_t seed, double seconds, int first_estimates, int j
     }
     out->nees_pose = nees;
     out->nees_pos = nees3;
+    g_rest_s = 0.0;
 }
 
 static void flight_stays_close_to_the_truth(void **state) {
@@ -281,6 +331,39 @@ static void pose_nees_is_inside_its_chi_square_band(void **state) {
            sum3 / RUNS, (sum - sum3) / RUNS, lo / RUNS, hi / RUNS);
     assert_true(sum3 >= lo && sum3 <= hi);
     assert_true(sum - sum3 >= lo && sum - sum3 <= hi);
+}
+
+/* The product's start: 1 s at rest, sfd_window_start_at_rest, then the flight. 20 Monte Carlo
+ * runs of 30 s with each Jacobian choice, printed; the shipped one (current estimates) must be in
+ * the 95 % band for position and attitude. (Measured: current 2.59 / 2.55; first estimates
+ * 121.6 / 45.5, core/docs/window_filter.md.) */
+static void pose_nees_from_a_start_at_rest(void **state) {
+    (void)state;
+    SFD_REQ("issue16.nees_band");
+    enum { RUNS = 20 };
+    double lo = 0.0, hi = 0.0;
+    assert_status(sfd_chi2_quantile_upper(0.975, 3 * RUNS, &lo), SFD_OK);
+    assert_status(sfd_chi2_quantile_upper(0.025, 3 * RUNS, &hi), SFD_OK);
+    for (int fe = 0; fe <= 1; ++fe) {
+        double sum = 0.0, sum3 = 0.0, err = 0.0;
+        for (int k = 0; k < RUNS; ++k) {
+            run_result_t r;
+            run_flight_from(200 + (uint64_t)k, 30.0, fe, -1, 0, 1, &r);
+            sum += r.nees_pose;
+            sum3 += r.nees_pos;
+            err += r.pos_err_m;
+        }
+        printf(
+            "  from rest, %s Jacobians: NEES position %.2f, attitude %.2f (band %.2f..%.2f); "
+            "mean position error %.3f m\n",
+            fe ? "first-estimate" : "current-estimate", sum3 / RUNS, (sum - sum3) / RUNS, lo / RUNS,
+            hi / RUNS, err / RUNS);
+        if (fe == 0) {
+            assert_true(sum3 >= lo && sum3 <= hi);
+            assert_true(sum - sum3 >= lo && sum - sum3 <= hi);
+            assert_true(err / RUNS < 0.6); /* 2 % of the ~28 m flown */
+        }
+    }
 }
 
 static void a_jumped_track_is_gated_and_does_not_pull(void **state) {
@@ -367,6 +450,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(flight_stays_close_to_the_truth),
         cmocka_unit_test(pose_nees_is_inside_its_chi_square_band),
+        cmocka_unit_test(pose_nees_from_a_start_at_rest),
         cmocka_unit_test(a_jumped_track_is_gated_and_does_not_pull),
         cmocka_unit_test(flagged_tracks_are_dropped_and_capacities_hold),
     };
