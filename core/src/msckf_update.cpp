@@ -243,7 +243,7 @@ extern "C" sfd_status_t sfd_msckf_update(sfd_msckf_stack_t *s, double *P, double
     // is a direction the rows do not observe (the window's gauge, for one): that row is dropped,
     // which the exact factor would have zero.
     int k = 0;
-    int piv[kDim];  // the pivot column of each kept row
+    int piv[kDim] = {};  // the pivot column of each kept row
     for (int c = 0; c < n; ++c) {
         if (s->used[c] == 0) continue;
         double *row = s->Tq[c];
