@@ -489,7 +489,7 @@ extern "C" sfd_status_t sfd_window_params_default(sfd_window_params_t *params) {
     params->use_depth_prior = 1;
     params->depth_var_floor_m2 = 1e-4;
     params->gauss_newton_iterations = 5;
-    params->first_estimates = 1;
+    params->first_estimates = 0;
     return SFD_OK;
 }
 

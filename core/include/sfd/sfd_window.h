@@ -73,8 +73,10 @@ typedef struct {
     int32_t use_depth_prior;  /**< 1: the first observation's depth prior is a measurement (1) */
     double depth_var_floor_m2;       /**< added to the wire's depth variance (1e-4) */
     int32_t gauss_newton_iterations; /**< triangulation steps, 1..20 (5) */
-    int32_t first_estimates; /**< 1: first-estimate Jacobians (1); 0: the plain EKF Jacobians at
-                                  the current estimate (for comparison; over-confident) */
+    int32_t first_estimates; /**< 0: Jacobians at the current estimate (0, the default: inside
+                                  the NEES band in unit.window); 1: first-estimate Jacobians
+                                  (an option: over-confident in unit.window's Monte Carlo,
+                                  core/docs/window_filter.md) */
 } sfd_window_params_t;
 
 /** One observation handed to sfd_window_frame(). */
