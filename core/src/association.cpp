@@ -2,6 +2,7 @@
 // Data association inside the EKF: OPRF (Kilic 2014 Section 3.2, Table 1), 1-point RANSAC
 // (Civera et al. 2010, Table 1), fundamental-matrix RANSAC (Table 2) and no association.
 // Readings chosen where the thesis is ambiguous: core/docs/association.md.
+#include "bits_equal.h"
 #include "ekf.hpp"
 #include "rotation.hpp"
 #include "sampson.hpp"
@@ -343,18 +344,6 @@ extern "C" sfd_status_t sfd_assoc_init(sfd_assoc_t *assoc, const sfd_assoc_param
 
 namespace {
 
-/// Bit-for-bit equality of doubles (the filter untouched since select, NaN payloads included).
-bool same_bits(const double *x, const double *y, int n) {
-    for (int k = 0; k < n; ++k) {
-        std::uint64_t bx = 0;
-        std::uint64_t by = 0;
-        std::memcpy(&bx, &x[k], sizeof bx);
-        std::memcpy(&by, &y[k], sizeof by);
-        if (bx != by) return false;
-    }
-    return true;
-}
-
 /// Above this the depth is not finite (overflow of the camera transform).
 constexpr double kInfDepth_m = std::numeric_limits<double>::max();
 
@@ -364,7 +353,8 @@ static_assert(sizeof(sfd_match_t) == kMatchDoubles * sizeof(double),
               "sfd_match_t must hold exactly its 16 doubles");
 
 bool same_prior(const sfd_assoc_t &a, const sfd_ekf_t &ekf) {
-    return same_bits(a.prior_p_m, ekf.p_IinW_m, 3) && same_bits(a.prior_q, ekf.q_ItoW, 4);
+    return sfd_bits_equal(a.prior_p_m, ekf.p_IinW_m, 3) != 0 &&
+           sfd_bits_equal(a.prior_q, ekf.q_ItoW, 4) != 0;
 }
 
 void write_verdicts(const sfd_assoc_t &a, sfd_assoc_result_t *out) {

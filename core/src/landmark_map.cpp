@@ -4,6 +4,7 @@
 // Derivations: core/docs/landmark_map.md.
 #include <cstring>
 
+#include "bits_equal.h"
 #include "core_private.hpp"
 #include "ekf.hpp"
 #include "rotation.hpp"
@@ -135,20 +136,6 @@ bool rotation_arg(const double *R9, Mat3 *R) {
     return is_rotation(*R, kRotTol);
 }
 
-/// True when the n doubles have the same bits (a cache key test: -0.0 and 0.0 differ, and a NaN
-/// never gets that far, it fails validation and is never stored).
-bool same_bits(const double *a, const double *b, int n) {
-    uint64_t diff = 0;
-    for (int i = 0; i < n; ++i) {
-        uint64_t x = 0;
-        uint64_t y = 0;
-        std::memcpy(&x, a + i, sizeof x);
-        std::memcpy(&y, b + i, sizeof y);
-        diff |= x ^ y;
-    }
-    return diff == 0;
-}
-
 /// The camera pose arguments of init_from_ray and refine checked (a rotation, a finite position,
 /// a finite covariance with a non-negative diagonal, or none) and loaded: R, and the symmetric
 /// part of the covariance (zero without one). A frame's landmarks share one pose, so the last
@@ -158,8 +145,9 @@ bool pose_args(sfd_landmark_map_t *map, const double *R9, const double *p3, cons
                Mat3 *R, Mat6 *Cpose) {
     const int32_t state = (cov36 != nullptr) ? 2 : 1;
     double *key = map->pose_key_;
-    if (map->pose_key_state_ == state && same_bits(key, R9, 9) && same_bits(key + 9, p3, 3) &&
-        (cov36 == nullptr || same_bits(key + 12, cov36, 36))) {
+    if (map->pose_key_state_ == state && sfd_bits_equal(key, R9, 9) &&
+        sfd_bits_equal(key + 9, p3, 3) &&
+        (cov36 == nullptr || sfd_bits_equal(key + 12, cov36, 36))) {
         *R = Eigen::Map<const Mat3>(R9);
         *Cpose = Eigen::Map<const Mat6>(map->pose_cov_sym_);
         return true;

@@ -6,6 +6,8 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "bits_equal.h"
+
 const char *sfd_reject_reason_str(int reason) {
     static const char *const names[SFD_REJECT_NUM_REASONS] = {
         "decode",         "count",   "nonfinite", "order",        "camera_id", "depth",
@@ -18,24 +20,14 @@ void sfd_pipeline_count_reject(sfd_pipeline_t *p, int reason) {
     if (p != NULL && reason >= 0 && reason < SFD_REJECT_NUM_REASONS) p->counters.rejected[reason]++;
 }
 
-/* Bitwise equality of doubles (a republished calibration is bit-identical). */
-static int same_bits(const double *a, const double *b, int n) {
-    for (int i = 0; i < n; ++i) {
-        uint64_t x, y;
-        memcpy(&x, &a[i], sizeof x);
-        memcpy(&y, &b[i], sizeof y);
-        if (x != y) return 0;
-    }
-    return 1;
-}
-
+/* A republished calibration is bit-identical. */
 static int same_calibration(const sfd_camera_t *a, const sfd_camera_t *b,
                             const sfd_extrinsics_t *ea, const sfd_extrinsics_t *eb) {
     const double ka[4] = {a->fx_px, a->fy_px, a->cx_px, a->cy_px};
     const double kb[4] = {b->fx_px, b->fy_px, b->cx_px, b->cy_px};
     return a->model == b->model && a->width_px == b->width_px && a->height_px == b->height_px &&
-           same_bits(ka, kb, 4) && same_bits(a->dist, b->dist, 4) &&
-           same_bits(ea->R_CtoI, eb->R_CtoI, 9) && same_bits(ea->p_CinI, eb->p_CinI, 3);
+           sfd_bits_equal(ka, kb, 4) && sfd_bits_equal(a->dist, b->dist, 4) &&
+           sfd_bits_equal(ea->R_CtoI, eb->R_CtoI, 9) && sfd_bits_equal(ea->p_CinI, eb->p_CinI, 3);
 }
 
 void sfd_pipeline_config_default(sfd_pipeline_config_t *cfg) {
@@ -91,7 +83,7 @@ int sfd_pipeline_set_camera(sfd_pipeline_t *p, const sfd_camera_t *cam,
     p->ext = *ext;
     sfd_nav_set_camera(&p->nav, cam, ext);
     p->have_camera = 1;
-    p->have_prev_frame = 0; /* a new calibration starts a new window */
+    p->have_prev_frame = 0; /* a changed calibration restarts the window */
     return SFD_REJECT_NONE;
 }
 

@@ -405,7 +405,7 @@ bool inject(sfd_window_t *w, const double *dx) {
 /// Appends the current IMU pose as the newest clone: P gains the rows and columns of (dp, dtheta).
 void augment(sfd_window_t *w, int64_t utime) {
     const int n = dim(*w);
-    const int c = n;  // first index of the new clone
+    const int c = n;  // first index of the added clone
     const int src[6] = {P_, P_ + 1, P_ + 2, TH, TH + 1, TH + 2};
     for (int a = 0; a < 6; ++a) {
         for (int j = 0; j < n; ++j) {
