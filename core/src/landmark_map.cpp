@@ -2,6 +2,8 @@
 // Landmark map: fixed-capacity table of 3-D landmarks keyed by track id, initialized from a ray
 // and a depth prior and refined by a gated, iterated 3x3 EKF update.
 // Derivations: core/docs/landmark_map.md.
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "bits_equal.h"
@@ -237,6 +239,35 @@ double map_cost(const double (*L)[3], const Vec3 &x0, const Vec3 &x, const Vec2 
     return w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + q;
 }
 
+// The entry of a track: its own, or a free one (the least recently seen landmark before utime
+// evicted when the map is full). SFD_ERR_CAPACITY when nothing may be evicted.
+sfd_status_t acquire_entry(sfd_landmark_map_t *map, int64_t track_id, int64_t utime, int32_t *out) {
+    int32_t slot = -1;
+    int32_t e = probe(*map, track_id, &slot);
+    if (e < 0) {
+        if (map->count >= kCap || map->num_free <= 0) {
+            const int32_t victim = lru_victim(*map, utime);
+            if (victim < 0) return SFD_ERR_CAPACITY;
+            int32_t vslot = -1;
+            if (probe(*map, map->entries[victim].track_id, &vslot) != victim) {
+                return SFD_ERR_STATE;  // index and entries disagree: a corrupted map
+            }
+            remove_entry(map, victim, vslot);
+            map->evictions += 1U;
+            // The removal may have shifted this id's cluster: probe again for the empty slot.
+            (void)probe(*map, track_id, &slot);
+        }
+        if (slot < 0 || map->num_free <= 0 || map->num_free > kCap) return SFD_ERR_STATE;
+        map->num_free -= 1;
+        e = map->free_list[map->num_free];
+        if (!entry_in_range(e) || map->entries[e].used != 0U) return SFD_ERR_STATE;
+        map->index[slot] = e;
+        map->count += 1;
+    }
+    *out = e;
+    return SFD_OK;
+}
+
 bool usable_entry(const sfd_landmark_map_t &map, int32_t index) {
     return entry_in_range(index) && map.entries[index].used == 1U;
 }
@@ -309,28 +340,9 @@ extern "C" sfd_status_t sfd_landmark_init_from_ray(sfd_landmark_map_t *map, int6
     C = sym(C);
     if (!all_finite(p.data(), 3) || !all_finite(C.data(), 9)) return SFD_ERR_NUMERIC;
 
-    int32_t slot = -1;
-    int32_t e = probe(*map, track_id, &slot);
-    if (e < 0) {
-        if (map->count >= kCap || map->num_free <= 0) {
-            const int32_t victim = lru_victim(*map, utime);
-            if (victim < 0) return SFD_ERR_CAPACITY;
-            int32_t vslot = -1;
-            if (probe(*map, map->entries[victim].track_id, &vslot) != victim) {
-                return SFD_ERR_STATE;  // index and entries disagree: a corrupted map
-            }
-            remove_entry(map, victim, vslot);
-            map->evictions += 1U;
-            // The removal may have shifted this id's cluster: probe again for the empty slot.
-            (void)probe(*map, track_id, &slot);
-        }
-        if (slot < 0 || map->num_free <= 0 || map->num_free > kCap) return SFD_ERR_STATE;
-        map->num_free -= 1;
-        e = map->free_list[map->num_free];
-        if (!entry_in_range(e) || map->entries[e].used != 0U) return SFD_ERR_STATE;
-        map->index[slot] = e;
-        map->count += 1;
-    }
+    int32_t e = -1;
+    const sfd_status_t ae = acquire_entry(map, track_id, utime, &e);
+    if (ae != SFD_OK) return ae;
     sfd_landmark_t &l = map->entries[e];
     std::memset(&l, 0, sizeof(l));
     l.track_id = track_id;
@@ -340,6 +352,44 @@ extern "C" sfd_status_t sfd_landmark_init_from_ray(sfd_landmark_map_t *map, int6
     l.last_seen_utime = utime;
     l.observations = 1;
     l.used = 1U;
+    if (index_out != nullptr) *index_out = e;
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_landmark_set(sfd_landmark_map_t *map, int64_t track_id,
+                                         const double p_W_m[3], const double cov_m2[9],
+                                         int64_t utime, int32_t *index_out) {
+    if (map == nullptr || p_W_m == nullptr || cov_m2 == nullptr) return SFD_ERR_INVAL;
+    if (map->initialized == 0) return SFD_ERR_STATE;
+    if (!all_finite(p_W_m, 3) || !all_finite(cov_m2, 9)) return SFD_ERR_INVAL;
+    // symmetric within rounding, then positive definite by its leading minors (Sylvester): a
+    // known point still has some uncertainty
+    double C[9];
+    double scale = 0.0;
+    for (int k = 0; k < 9; ++k) scale = std::max(scale, std::fabs(cov_m2[k]));
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+            const double a = cov_m2[3 * r + c], b = cov_m2[3 * c + r];
+            if (std::fabs(a - b) > 1e-12 * (1.0 + scale)) return SFD_ERR_INVAL;
+            C[3 * r + c] = 0.5 * (a + b);
+        }
+    }
+    const double m1 = C[0], m2 = C[0] * C[4] - C[1] * C[3];
+    const double m3 = C[0] * (C[4] * C[8] - C[5] * C[7]) - C[1] * (C[3] * C[8] - C[5] * C[6]) +
+                      C[2] * (C[3] * C[7] - C[4] * C[6]);
+    if (!(m1 > 0.0 && m2 > 0.0 && m3 > 0.0)) return SFD_ERR_INVAL;
+    int32_t e = -1;
+    const sfd_status_t ae = acquire_entry(map, track_id, utime, &e);
+    if (ae != SFD_OK) return ae;
+    sfd_landmark_t &l = map->entries[e];
+    std::memset(&l, 0, sizeof(l));
+    l.track_id = track_id;
+    for (int k = 0; k < 3; ++k) l.p_W_m[k] = p_W_m[k];
+    std::memcpy(l.cov_m2, C, sizeof(C));
+    l.last_seen_utime = utime;
+    l.observations = 1;
+    l.used = 1U;
+    l.fixed = 1U;
     if (index_out != nullptr) *index_out = e;
     return SFD_OK;
 }

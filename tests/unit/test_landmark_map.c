@@ -845,6 +845,49 @@ static void landmark_full_map_evicts_lru_or_refuses_with_capacity(void **state) 
     assert_canaries_intact();
 }
 
+/* GIVEN a known point WHEN set THEN the entry holds it bit for bit, marked fixed, replacing a
+ * landmark the track had; a full map evicts for it as for a new landmark; a covariance that is
+ * not symmetric positive definite, a non-finite point or an uninitialized map is refused with the
+ * map unchanged. */
+static void landmark_set_holds_a_known_point_as_given(void **state) {
+    (void)state;
+    sfd_landmark_map_t *map = guarded_map();
+    const double p[3] = {1.25, -0.5, 3.0}, C[9] = {4e-4, 1e-5, 0, 1e-5, 4e-4, 0, 0, 0, 9e-4};
+    int32_t idx = -1;
+    assert_status(insert(map, 5, 100, &idx), SFD_OK);
+    assert_int_equal(map->entries[idx].fixed, 0);
+    int32_t sidx = -1;
+    assert_status(sfd_landmark_set(map, 5, p, C, 120, &sidx), SFD_OK);
+    assert_int_equal(sidx, idx);
+    const sfd_landmark_t *l = &map->entries[sidx];
+    assert_memory_equal(l->p_W_m, p, sizeof p);
+    assert_memory_equal(l->cov_m2, C, sizeof C);
+    assert_int_equal(l->fixed, 1);
+    assert_true(l->last_seen_utime == 120);
+    assert_int_equal(map->count, 1);
+    static sfd_landmark_map_t snapshot;
+    memcpy(&snapshot, map, sizeof snapshot);
+    const double not_spd[9] = {4e-4, 0, 0, 0, -1e-4, 0, 0, 0, 9e-4};
+    const double not_sym[9] = {4e-4, 1e-4, 0, 0, 4e-4, 0, 0, 0, 9e-4};
+    const double nan_p[3] = {NAN, 0, 1};
+    assert_status(sfd_landmark_set(map, 6, p, not_spd, 120, NULL), SFD_ERR_INVAL);
+    assert_status(sfd_landmark_set(map, 6, p, not_sym, 120, NULL), SFD_ERR_INVAL);
+    assert_status(sfd_landmark_set(map, 6, nan_p, C, 120, NULL), SFD_ERR_INVAL);
+    assert_status(sfd_landmark_set(map, 6, NULL, C, 120, NULL), SFD_ERR_INVAL);
+    assert_memory_equal(&snapshot, map, sizeof snapshot);
+    static sfd_landmark_map_t raw; /* zeroed, never initialized */
+    assert_status(sfd_landmark_set(&raw, 6, p, C, 120, NULL), SFD_ERR_STATE);
+    /* full: the least recently seen goes */
+    for (int32_t i = 1; i < SFD_MAX_LANDMARKS; ++i) {
+        assert_status(insert(map, 1000 + i, 130, NULL), SFD_OK);
+    }
+    assert_status(sfd_landmark_set(map, 7, p, C, 140, &sidx), SFD_OK);
+    assert_int_equal(sidx, idx); /* track 5, seen at 120, was the oldest */
+    assert_int_equal(sfd_landmark_find(map, 5), -1);
+    assert_int_equal(map->evictions, 1);
+    assert_canaries_intact();
+}
+
 /* GIVEN a random sequence of inserts and removes at load factors up to 1/2 (probe clusters) WHEN
  * checking against a brute-force reference after every step THEN find agrees exactly (so the
  * backward-shift deletion keeps every probe chain intact), indices never move, and count and
@@ -1126,6 +1169,7 @@ int main(void) {
         cmocka_unit_test(landmark_refine_gate_rejects_20px_jump_and_leaves_landmark_unchanged),
         cmocka_unit_test(landmark_full_map_evicts_lru_or_refuses_with_capacity),
         cmocka_unit_test(landmark_find_and_remove_round_trip),
+        cmocka_unit_test(landmark_set_holds_a_known_point_as_given),
         cmocka_unit_test(landmark_evict_older_than_drops_exactly_the_stale_ones),
         cmocka_unit_test(landmark_to_obs_carries_position_and_covariance),
         cmocka_unit_test(landmark_rejects_invalid_arguments_with_status_codes),

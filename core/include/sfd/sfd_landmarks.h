@@ -49,6 +49,7 @@ typedef struct {
     int32_t observations;    /**< observations fused, the initializing one included */
     int32_t rejections;      /**< observations refused by the refinement gate */
     uint8_t used;            /**< 1 when the entry holds a landmark */
+    uint8_t fixed;           /**< 1: a known landmark (sfd_landmark_set): never refined */
 } sfd_landmark_t;
 
 /** The map. Caller-owned (declare it static: it is ~70 KiB at the default capacity);
@@ -133,6 +134,19 @@ sfd_status_t sfd_landmark_init_from_ray(sfd_landmark_map_t *map, int64_t track_i
                                         const double cov_pose6[36], const double xn[2],
                                         double depth_m, double depth_var_m2, double sigma_xn,
                                         int64_t utime, int32_t *index_out);
+
+/**
+ * @brief Sets a track's landmark to a known point (a surveyed map, map-based localization): the
+ *        position and covariance as given, marked fixed (the navigation side does not refine it;
+ *        sfd_landmark_refine() itself still would). Replaces the track's landmark if it has one;
+ *        when the map is full, evicts as sfd_landmark_init_from_ray() does.
+ * @param cov_m2 3x3 row-major, symmetric (within rounding) and positive definite.
+ * @return SFD_OK; SFD_ERR_INVAL for null, non-finite values or a covariance that is not
+ *         symmetric positive definite; SFD_ERR_STATE for an uninitialized map; SFD_ERR_CAPACITY
+ *         when the map is full and nothing may be evicted (map unchanged on error).
+ */
+sfd_status_t sfd_landmark_set(sfd_landmark_map_t *map, int64_t track_id, const double p_W_m[3],
+                              const double cov_m2[9], int64_t utime, int32_t *index_out);
 
 /**
  * @brief Refines a landmark with a new observation (EKF update of the 3-D point, pose known):
