@@ -93,6 +93,8 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
                                                 "default_depth_m",
                                                 "default_depth_var_m2",
                                                 "max_imu_gap_us",
+                                                "time_horizon_us",
+                                                "time_resync_messages",
                                                 "gyro_bias_rad_s",
                                                 "camera_id",
                                                 "publish_timing",
@@ -156,6 +158,27 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
     if (!root["max_imu_gap_us"].empty()) {
         if (!read_number(root["max_imu_gap_us"], where("max_imu_gap_us"), &d, error)) return false;
         p.max_imu_gap_us = static_cast<int64_t>(d);
+    }
+    if (!root["time_horizon_us"].empty()) {
+        if (!read_number(root["time_horizon_us"], where("time_horizon_us"), &d, error))
+            return false;
+        if (!(d > 0.0 && d <= 9.0e15) || d != static_cast<double>(static_cast<int64_t>(d))) {
+            *error = where("time_horizon_us") + ": " + std::to_string(d) +
+                     " is not a whole number of microseconds > 0";
+            return false;
+        }
+        cfg->node.time.horizon_us = static_cast<int64_t>(d);
+    }
+    if (!root["time_resync_messages"].empty()) {
+        if (!read_int(root["time_resync_messages"], where("time_resync_messages"), &i, error)) {
+            return false;
+        }
+        if (i < 2 || i > 1000) {
+            *error =
+                where("time_resync_messages") + ": " + std::to_string(i) + " is not in 2..1000";
+            return false;
+        }
+        cfg->node.time.resync_messages = i;
     }
     const cv::FileNode bias = root["gyro_bias_rad_s"];
     if (!bias.empty()) {

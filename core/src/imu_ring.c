@@ -46,8 +46,8 @@ int sfd_imu_ring_push(sfd_imu_ring_t *ring, const sfd_imu_sample_t *sample) {
     return result;
 }
 
-int sfd_imu_ring_window(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us,
-                        sfd_imu_sample_t *out, int32_t cap, int32_t *n) {
+int sfd_imu_ring_span(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us, int32_t cap,
+                      sfd_imu_span_t *span) {
     if (ring->count == 0 || sfd_imu_ring_newest(ring) < t1_us) return SFD_REJECT_IMU_LATE;
     if (at(ring, 0)->t_us > t0_us) return SFD_REJECT_IMU_GAP;
     /* first: last sample at or before t0 (binary search over the time-ordered ring) */
@@ -61,26 +61,49 @@ int sfd_imu_ring_window(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us
         }
     }
     const int32_t first = lo;
-    int32_t last = first;
-    while (last < ring->count - 1 && at(ring, last)->t_us < t1_us) ++last;
-    const int32_t count = last - first + 1;
+    /* last: first sample at or after t1 (binary search; newest >= t1 was checked above) */
+    lo = first;
+    hi = ring->count - 1;
+    while (lo < hi) { /* invariant: at(hi) >= t1 */
+        const int32_t mid = lo + (hi - lo) / 2;
+        if (at(ring, mid)->t_us < t1_us) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    const int32_t count = hi - first + 1;
     if (count > cap) return SFD_REJECT_CAPACITY;
-    for (int32_t i = 0; i < count; ++i) out[i] = *at(ring, first + i);
+    const int32_t start = (ring->head + first) % SFD_IMU_RING_CAPACITY;
+    const int32_t tail = SFD_IMU_RING_CAPACITY - start; /* samples before the array wraps */
+    span->piece[0] = &ring->samples[start];
+    span->count[0] = count < tail ? count : tail;
+    span->count[1] = count - span->count[0];
+    span->piece[1] = span->count[1] > 0 ? &ring->samples[0] : NULL;
+    return SFD_REJECT_NONE;
+}
+
+int sfd_imu_ring_window(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us,
+                        sfd_imu_sample_t *out, int32_t cap, int32_t *n) {
+    sfd_imu_span_t span;
+    const int r = sfd_imu_ring_span(ring, t0_us, t1_us, cap, &span);
+    if (r != SFD_REJECT_NONE) return r;
+    const int32_t count = sfd_imu_span_count(&span);
+    for (int32_t i = 0; i < count; ++i) out[i] = *sfd_imu_span_at(&span, i);
     *n = count;
     return SFD_REJECT_NONE;
 }
 
 int sfd_assemble_motion(const sfd_imu_ring_t *ring, const sfd_extrinsics_t *ext,
                         const double gyro_bias_rad_s[3], int64_t t_prev_us, int64_t t_cur_us,
-                        int64_t max_gap_us, sfd_imu_sample_t *scratch, int32_t cap,
-                        sfd_frame_motion_t *motion) {
+                        int64_t max_gap_us, sfd_frame_motion_t *motion) {
     if (t_cur_us <= t_prev_us) return SFD_REJECT_ORDER;
-    int32_t n = 0;
-    const int w = sfd_imu_ring_window(ring, t_prev_us, t_cur_us, scratch, cap, &n);
+    sfd_imu_span_t span;
+    const int w = sfd_imu_ring_span(ring, t_prev_us, t_cur_us, SFD_MAX_IMU_SAMPLES, &span);
     if (w != SFD_REJECT_NONE) return w;
     double q[4], R_I[9], R_C[9];
     const sfd_status_t st =
-        sfd_gyro_integrate(scratch, (size_t)n, t_prev_us, t_cur_us, gyro_bias_rad_s, max_gap_us, q);
+        sfd_gyro_integrate_span(&span, t_prev_us, t_cur_us, gyro_bias_rad_s, max_gap_us, q);
     if (st == SFD_ERR_RANGE) return SFD_REJECT_IMU_GAP;
     if (st != SFD_OK) return SFD_REJECT_CORE;
     if (sfd_quat_to_rotmat(q, R_I) != SFD_OK ||

@@ -130,8 +130,8 @@ static void started(sfd_nav_t *nav, int64_t utime) {
  * (blocks of its block_samples, as many whole blocks as the samples fill, up to its window; at
  * least 2): gravity's direction and the gyro bias from that window, position 0, yaw 0. Not at
  * rest: no start (not a rejection), the next frame tries again. */
-static int start_window_at_rest(sfd_nav_t *nav, const sfd_imu_sample_t *s, int32_t n,
-                                int64_t t_us) {
+static int start_window_at_rest(sfd_nav_t *nav, const sfd_imu_span_t *span, int64_t t_us) {
+    const int32_t n = sfd_imu_span_count(span);
     sfd_rest_params_t rp = nav->rest.p;
     int32_t blocks = n / rp.block_samples;
     if (blocks > SFD_REST_MAX_BLOCKS) blocks = SFD_REST_MAX_BLOCKS;
@@ -140,7 +140,8 @@ static int start_window_at_rest(sfd_nav_t *nav, const sfd_imu_sample_t *s, int32
     if (sfd_rest_init(&nav->rest, &rp) != SFD_OK) return SFD_REJECT_CORE;
     const int32_t first = n - blocks * rp.block_samples;
     for (int32_t i = first; i < n; ++i) {
-        (void)sfd_rest_push(&nav->rest, s[i].t_us, s[i].gyro_rad_s, s[i].accel_m_s2);
+        const sfd_imu_sample_t *s = sfd_imu_span_at(span, i);
+        (void)sfd_rest_push(&nav->rest, s->t_us, s->gyro_rad_s, s->accel_m_s2);
     }
     sfd_rest_result_t rr;
     if (sfd_rest_evaluate(&nav->rest, &rr) != SFD_OK || !rr.ready || !rr.at_rest) {
@@ -157,20 +158,21 @@ static int start_window_at_rest(sfd_nav_t *nav, const sfd_imu_sample_t *s, int32
 }
 
 /* Starts the filter from the IMU of [t - init_rest_s, t] (SPEC: at rest, gravity direction). */
-static int start_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
-                         sfd_imu_sample_t *scratch, int32_t cap) {
+static int start_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us) {
     const int64_t rest_us = (int64_t)(nav->cfg.init_rest_s * 1e6);
-    int32_t n = 0;
-    const int r = sfd_imu_ring_window(ring, t_us - rest_us, t_us, scratch, cap, &n);
+    sfd_imu_span_t span;
+    const int r = sfd_imu_ring_span(ring, t_us - rest_us, t_us, SFD_IMU_RING_CAPACITY, &span);
+    const int32_t n = (r == SFD_REJECT_NONE) ? sfd_imu_span_count(&span) : 0;
     /* Not yet init_rest_s of IMU before this frame: keep waiting (not a rejection). */
     if (r == SFD_REJECT_IMU_GAP || (r == SFD_REJECT_NONE && n < 2)) return SFD_REJECT_NONE;
     if (r != SFD_REJECT_NONE) return r;
-    if (nav->cfg.window_filter) return start_window_at_rest(nav, scratch, n, t_us);
+    if (nav->cfg.window_filter) return start_window_at_rest(nav, &span, t_us);
     double f[3] = {0, 0, 0}, w[3] = {0, 0, 0};
     for (int32_t i = 0; i < n; ++i) {
+        const sfd_imu_sample_t *s = sfd_imu_span_at(&span, i);
         for (int k = 0; k < 3; ++k) {
-            f[k] += scratch[i].accel_m_s2[k];
-            w[k] += scratch[i].gyro_rad_s[k];
+            f[k] += s->accel_m_s2[k];
+            w[k] += s->gyro_rad_s[k];
         }
     }
     for (int k = 0; k < 3; ++k) {
@@ -219,14 +221,44 @@ void sfd_nav_truth(sfd_nav_t *nav, int64_t utime, const double p_m[3], const dou
     started(nav, utime);
 }
 
-int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
-                    sfd_imu_sample_t *scratch, int32_t cap) {
+sfd_status_t sfd_nav_start_at(sfd_nav_t *nav, int64_t utime, const double p_m[3],
+                              const double v_m_s[3], const double q_ItoW[4],
+                              const double bg_rad_s[3], const double ba_m_s2[3],
+                              const double p0_diag[SFD_EKF_DIM]) {
+    if (nav == NULL || p_m == NULL || v_m_s == NULL || q_ItoW == NULL || bg_rad_s == NULL ||
+        ba_m_s2 == NULL) {
+        return SFD_ERR_INVAL;
+    }
+    if (!nav->cfg.enabled) return SFD_ERR_STATE;
+    double q[4];
+    memcpy(q, q_ItoW, sizeof q);
+    if (sfd_quat_normalize(q) != SFD_OK) return SFD_ERR_INVAL;
+    const double *P0 = p0_diag != NULL ? p0_diag : nav->cfg.p0_diag;
+    sfd_status_t st;
+    if (nav->cfg.window_filter) {
+        if (p0_diag != NULL) {
+            /* the window filter's P0 is in its parameters; its attitude error is global (the
+             * header says what that means for the attitude variances) */
+            memcpy(nav->win.prm.p0_diag, p0_diag, sizeof nav->win.prm.p0_diag);
+        }
+        st = sfd_window_start_at(&nav->win, utime, p_m, v_m_s, q, bg_rad_s, ba_m_s2);
+        if (st == SFD_OK) st = sfd_window_to_ekf(&nav->win, &nav->ekf);
+    } else {
+        st = sfd_ekf_init(&nav->ekf, &nav->cfg.noise, p_m, v_m_s, q, bg_rad_s, ba_m_s2, P0);
+    }
+    if (st != SFD_OK) return st;
+    started(nav, utime);
+    return SFD_OK;
+}
+
+int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us) {
     if (!nav->cfg.enabled) return SFD_REJECT_NONE;
     if (!nav->ready && nav->cfg.init_from_truth) return SFD_REJECT_NONE; /* waits for TRUTH */
-    if (!nav->ready) return start_at_rest(nav, ring, t_us, scratch, cap);
+    if (!nav->ready) return start_at_rest(nav, ring, t_us);
     if (t_us <= nav->ekf_utime) return SFD_REJECT_NONE;
-    int32_t n = 0;
-    const int r = sfd_imu_ring_window(ring, nav->ekf_utime, t_us, scratch, cap, &n);
+    sfd_imu_span_t span;
+    const int r = sfd_imu_ring_span(ring, nav->ekf_utime, t_us, SFD_IMU_RING_CAPACITY, &span);
+    const int32_t n = (r == SFD_REJECT_NONE) ? sfd_imu_span_count(&span) : 0;
     if (r != SFD_REJECT_NONE) {
         if (r == SFD_REJECT_IMU_GAP) nav->ready = 0; /* lost: restart from gravity later */
         return r;
@@ -235,15 +267,15 @@ int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
      * (or t_us). The window starts at the last sample at or before ekf_utime. */
     int64_t t = nav->ekf_utime;
     for (int32_t i = 0; i < n && t < t_us; ++i) {
-        const int64_t t_end =
-            (i + 1 < n && scratch[i + 1].t_us < t_us) ? scratch[i + 1].t_us : t_us;
+        const sfd_imu_sample_t *s = sfd_imu_span_at(&span, i);
+        const int64_t t_next = (i + 1 < n) ? sfd_imu_span_at(&span, i + 1)->t_us : t_us;
+        const int64_t t_end = (t_next < t_us) ? t_next : t_us;
         if (t_end <= t) continue;
         const double dt = (double)(t_end - t) * 1e-6;
         if (dt > nav->cfg.noise.max_dt_s ||
             (nav->cfg.window_filter
-                 ? sfd_window_propagate(&nav->win, scratch[i].gyro_rad_s, scratch[i].accel_m_s2, dt)
-                 : sfd_ekf_propagate(&nav->ekf, scratch[i].gyro_rad_s, scratch[i].accel_m_s2,
-                                     dt)) != SFD_OK) {
+                 ? sfd_window_propagate(&nav->win, s->gyro_rad_s, s->accel_m_s2, dt)
+                 : sfd_ekf_propagate(&nav->ekf, s->gyro_rad_s, s->accel_m_s2, dt)) != SFD_OK) {
             nav->ready = 0;
             return (dt > nav->cfg.noise.max_dt_s) ? SFD_REJECT_IMU_GAP : SFD_REJECT_CORE;
         }
@@ -410,6 +442,10 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *stat
         }
         const int32_t li = sfd_landmark_find(&nav->map, id);
         if (li >= 0) {
+            if (nav->map.entries[li].fixed) {
+                nav->map.entries[li].last_seen_utime = t; /* known: seen, never refined */
+                continue;
+            }
             if (status[i] != SFD_VERDICT_CONSISTENT) continue;
             sfd_landmark_update_t info;
             (void)sfd_landmark_refine(&nav->map, li, R_CtoW, p_C, have_cov ? cov6 : NULL,

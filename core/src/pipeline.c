@@ -10,8 +10,9 @@
 
 const char *sfd_reject_reason_str(int reason) {
     static const char *const names[SFD_REJECT_NUM_REASONS] = {
-        "decode",         "count",   "nonfinite", "order",        "camera_id", "depth",
-        "no_camera_info", "imu_gap", "imu_late",  "imu_overflow", "capacity",  "core"};
+        "decode",   "count",          "nonfinite", "order",    "camera_id",
+        "depth",    "no_camera_info", "imu_gap",   "imu_late", "imu_overflow",
+        "capacity", "core",           "time_jump", "restart"};
     if (reason < 0 || reason >= SFD_REJECT_NUM_REASONS) return "unknown";
     return names[reason];
 }
@@ -35,6 +36,7 @@ void sfd_pipeline_config_default(sfd_pipeline_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
     sfd_params_default(&cfg->params);
     sfd_nav_config_default(&cfg->nav);
+    sfd_time_guard_params_default(&cfg->time);
 }
 
 sfd_status_t sfd_pipeline_init(sfd_pipeline_t *p, const sfd_pipeline_config_t *cfg) {
@@ -45,7 +47,10 @@ sfd_status_t sfd_pipeline_init(sfd_pipeline_t *p, const sfd_pipeline_config_t *c
     const int needs_filter = m == SFD_METHOD_OPRF || m == SFD_METHOD_RANSAC1 ||
                              m == SFD_METHOD_RANSACF || m == SFD_METHOD_BOTH;
     if (needs_filter && !cfg->nav.enabled) return SFD_ERR_INVAL;
+    if (sfd_time_guard_params_validate(&cfg->time) != SFD_OK) return SFD_ERR_INVAL;
     if (sfd_nav_init(&p->nav, &cfg->nav, &cfg->params) != SFD_OK) return SFD_ERR_INVAL;
+    (void)sfd_time_guard_init(&p->imu_time, &cfg->time); /* validated above */
+    (void)sfd_time_guard_init(&p->frame_time, &cfg->time);
     p->cfg = *cfg;
     memset(&p->counters, 0, sizeof p->counters);
     sfd_imu_ring_init(&p->ring);
@@ -58,6 +63,7 @@ sfd_status_t sfd_pipeline_init(sfd_pipeline_t *p, const sfd_pipeline_config_t *c
         p->slot_state[k] = SFD_PIPELINE_SLOT_FREE;
         p->slot_reason[k] = SFD_REJECT_NONE;
         p->slot_seq[k] = 0;
+        p->slot_restart[k] = 0;
     }
     p->next_seq = 0;
     p->cur_slot = -1;
@@ -99,12 +105,32 @@ static void make_due(sfd_pipeline_t *p, int slot, int reason) {
     p->slot_reason[slot] = reason;
 }
 
+/* The verdict of the time policy as a rejection reason (ACCEPT, RESYNC: none). */
+static int time_reason(sfd_time_verdict_t v) {
+    if (v == SFD_TIME_ORDER) return SFD_REJECT_ORDER;
+    if (v == SFD_TIME_JUMP) return SFD_REJECT_TIME_JUMP;
+    return SFD_REJECT_NONE;
+}
+
+/* A new IMU time base: the old samples are of no use to any frame to come, and the filter's time
+ * refers to the old base. A frame waiting for IMU of the old base will not get it. */
+static void restart_imu_side(sfd_pipeline_t *p) {
+    sfd_pipeline_count_reject(p, SFD_REJECT_RESTART);
+    sfd_imu_ring_init(&p->ring);
+    p->nav.ready = 0;
+    const int w = waiting_slot(p);
+    if (w >= 0) make_due(p, w, SFD_REJECT_IMU_GAP);
+}
+
 int sfd_pipeline_push_imu(sfd_pipeline_t *p, const sfd_imu_sample_t *s) {
     if (p == NULL || s == NULL) return SFD_REJECT_DECODE;
-    if (s->t_us <= p->last_imu_utime) {
-        sfd_pipeline_count_reject(p, SFD_REJECT_ORDER);
-        return SFD_REJECT_ORDER;
+    const sfd_time_verdict_t v = sfd_time_guard_check(&p->imu_time, s->t_us, &p->frame_time);
+    const int tr = time_reason(v);
+    if (tr != SFD_REJECT_NONE) {
+        sfd_pipeline_count_reject(p, tr);
+        return tr;
     }
+    if (v == SFD_TIME_RESYNC) restart_imu_side(p);
     p->last_imu_utime = s->t_us;
     const int r = sfd_imu_ring_push(&p->ring, s);
     sfd_pipeline_count_reject(p, r); /* overflow: stored, oldest dropped */
@@ -120,24 +146,30 @@ int sfd_pipeline_push_frame(sfd_pipeline_t *p, const sfd_frame_t *frame) {
         r = SFD_REJECT_NO_CAMERA_INFO;
     } else if (frame->num_features < 0 || frame->num_features > SFD_MAX_FEATURES) {
         r = SFD_REJECT_CAPACITY;
-    } else if (frame->utime <= p->last_frame_utime) {
-        r = SFD_REJECT_ORDER;
     }
     if (r != SFD_REJECT_NONE) {
         sfd_pipeline_count_reject(p, r);
         return r;
     }
-    /* The waiting frame's IMU never came before this frame: it is judged without motion. */
-    const int w = waiting_slot(p);
-    if (w >= 0) make_due(p, w, SFD_REJECT_IMU_LATE);
     int slot = -1;
     for (int k = 0; k < SFD_PIPELINE_FRAME_SLOTS && slot < 0; ++k) {
         if (p->slot_state[k] == SFD_PIPELINE_SLOT_FREE) slot = k;
     }
-    if (slot < 0) {
+    const int w = waiting_slot(p);
+    if (slot < 0) { /* the caller did not judge due frames; the frame never becomes a reference */
+        if (w >= 0) make_due(p, w, SFD_REJECT_IMU_LATE);
         sfd_pipeline_count_reject(p, SFD_REJECT_CAPACITY);
         return SFD_REJECT_CAPACITY;
     }
+    const sfd_time_verdict_t v = sfd_time_guard_check(&p->frame_time, frame->utime, &p->imu_time);
+    r = time_reason(v);
+    if (r != SFD_REJECT_NONE) {
+        sfd_pipeline_count_reject(p, r);
+        return r;
+    }
+    /* The waiting frame's IMU never came before this frame: it is judged without motion. */
+    if (w >= 0) make_due(p, w, SFD_REJECT_IMU_LATE);
+    p->slot_restart[slot] = (v == SFD_TIME_RESYNC);
     p->last_frame_utime = frame->utime;
     const size_t used =
         offsetof(sfd_frame_t, features) + (size_t)frame->num_features * sizeof frame->features[0];
@@ -185,6 +217,27 @@ void sfd_pipeline_truth(sfd_pipeline_t *p, int64_t utime, const double p_m[3],
     if (p->ring.need_known) { /* a frame was judged, at prev_frame_utime */
         sfd_imu_ring_set_needed(&p->ring, imu_needed_from(p, p->prev_frame_utime));
     }
+}
+
+sfd_status_t sfd_pipeline_start_at(sfd_pipeline_t *p, int64_t utime, const double p_m[3],
+                                   const double v_m_s[3], const double q_ItoW[4],
+                                   const double bg_rad_s[3], const double ba_m_s2[3],
+                                   const double p0_diag[SFD_EKF_DIM]) {
+    if (p == NULL) return SFD_ERR_INVAL;
+    if (p->cur_slot >= 0) return SFD_ERR_STATE;
+    const sfd_status_t st =
+        sfd_nav_start_at(&p->nav, utime, p_m, v_m_s, q_ItoW, bg_rad_s, ba_m_s2, p0_diag);
+    if (st == SFD_OK && p->ring.need_known) {
+        sfd_imu_ring_set_needed(&p->ring, imu_needed_from(p, p->prev_frame_utime));
+    }
+    return st;
+}
+
+sfd_status_t sfd_pipeline_known_landmark(sfd_pipeline_t *p, int64_t track_id, const double p_W_m[3],
+                                         const double cov_m2[9], int64_t utime) {
+    if (p == NULL) return SFD_ERR_INVAL;
+    if (!p->cfg.nav.enabled) return SFD_ERR_STATE;
+    return sfd_landmark_set(&p->nav.map, track_id, p_W_m, cov_m2, utime, NULL);
 }
 
 int32_t sfd_pipeline_frames_due(const sfd_pipeline_t *p) {
@@ -245,8 +298,7 @@ static void run_parity(sfd_pipeline_t *p, const sfd_frame_t *frame, int imu_reas
         /* the filter's gyro bias once it runs (estimated at rest and online), else the config's */
         const double *bias = filter_runs ? p->nav.ekf.bg_rad_s : p->cfg.params.gyro_bias_rad_s;
         reason = sfd_assemble_motion(&p->ring, &p->ext, bias, p->prev_frame_utime, frame->utime,
-                                     p->cfg.params.max_imu_gap_us, p->imu_scratch,
-                                     SFD_PIPELINE_IMU_SCRATCH, &motion);
+                                     p->cfg.params.max_imu_gap_us, &motion);
         if (reason == SFD_REJECT_NONE) {
             mp = &motion;
             motion.translation_known = 0;
@@ -267,6 +319,17 @@ static void run_parity(sfd_pipeline_t *p, const sfd_frame_t *frame, int imu_reas
     }
 }
 
+/* A new frame time base: the parity window, the filter (its clones are at old frame times) and
+ * the tracks and landmarks start over; the IMU ring is kept (a restarted publisher's IMU is in
+ * the new base already, or restarts on its own). */
+static void restart_frame_side(sfd_pipeline_t *p) {
+    sfd_pipeline_count_reject(p, SFD_REJECT_RESTART);
+    p->have_prev_frame = 0;
+    sfd_parity_reset(&p->parity);
+    p->nav.ready = 0;
+    if (p->have_camera) sfd_nav_set_camera(&p->nav, &p->camera, &p->ext);
+}
+
 sfd_status_t sfd_pipeline_detect(sfd_pipeline_t *p) {
     if (p == NULL) return SFD_ERR_INVAL;
     if (p->cur_slot >= 0) return SFD_ERR_STATE;
@@ -276,6 +339,11 @@ sfd_status_t sfd_pipeline_detect(sfd_pipeline_t *p) {
         if (slot < 0 || (int32_t)(p->slot_seq[k] - p->slot_seq[slot]) < 0) slot = k;
     }
     if (slot < 0) return SFD_ERR_STATE;
+    if (p->slot_restart[slot]) {
+        /* The first frame of a new time base, judged after every frame of the old one. */
+        p->slot_restart[slot] = 0;
+        restart_frame_side(p);
+    }
     p->cur_slot = slot;
     p->have_output = 0;
     const sfd_frame_t *frame = &p->frames[slot];
@@ -284,8 +352,7 @@ sfd_status_t sfd_pipeline_detect(sfd_pipeline_t *p) {
     /* The filter first: its propagation needs the same IMU as the parity motion. */
     p->nav_ok = 0;
     if (p->cfg.nav.enabled && imu_reason == SFD_REJECT_NONE) {
-        const int r =
-            sfd_nav_advance(&p->nav, &p->ring, frame->utime, p->imu_scratch, SFD_MAX_IMU_SAMPLES);
+        const int r = sfd_nav_advance(&p->nav, &p->ring, frame->utime);
         sfd_pipeline_count_reject(p, r);
         p->nav_ok = (r == SFD_REJECT_NONE) && p->nav.ready;
     } else if (p->cfg.nav.enabled && p->nav.ready) {

@@ -17,6 +17,7 @@ void sfd_node_config_default(sfd_node_config_t *cfg) {
     cfg->camera_id = -1;
     cfg->publish_timing = 1;
     sfd_nav_config_default(&cfg->nav);
+    sfd_time_guard_params_default(&cfg->time);
 }
 
 sfd_status_t sfd_node_init(sfd_node_t *node, const sfd_node_config_t *cfg,
@@ -25,6 +26,7 @@ sfd_status_t sfd_node_init(sfd_node_t *node, const sfd_node_config_t *cfg,
     sfd_pipeline_config_t pc;
     pc.params = cfg->params;
     pc.nav = cfg->nav;
+    pc.time = cfg->time;
     const sfd_status_t s = sfd_pipeline_init(&node->pipe, &pc);
     if (s != SFD_OK) return s;
     node->cfg = *cfg;

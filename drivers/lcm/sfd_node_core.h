@@ -47,10 +47,11 @@ typedef enum {
 } sfd_node_output_t;
 
 typedef struct {
-    sfd_params_t params;    /**< detector parameters (method: any sfd_method_t) */
-    sfd_nav_config_t nav;   /**< the filter (required by oprf, ransac1, ransacf, both) */
-    int32_t camera_id;      /**< camera to follow; -1 = the first CAMERA_INFO's */
-    int32_t publish_timing; /**< 1: publish SFD_TIMING after every frame */
+    sfd_params_t params;          /**< detector parameters (method: any sfd_method_t) */
+    sfd_nav_config_t nav;         /**< the filter (required by oprf, ransac1, ransacf, both) */
+    sfd_time_guard_params_t time; /**< time-glitch policy of the IMU and frame streams */
+    int32_t camera_id;            /**< camera to follow; -1 = the first CAMERA_INFO's */
+    int32_t publish_timing;       /**< 1: publish SFD_TIMING after every frame */
 } sfd_node_config_t;
 
 /** Publish callback: kind, encoded message, size, and the utime of the frame it belongs to. */
@@ -89,7 +90,7 @@ typedef struct {
 } sfd_node_t;
 
 /** @brief Defaults: sfd_params_default(), camera_id -1 (follow the first CAMERA_INFO), timing
- *         published, sfd_nav_config_default(). */
+ *         published, sfd_nav_config_default(), sfd_time_guard_params_default(). */
 void sfd_node_config_default(sfd_node_config_t *cfg);
 
 /**

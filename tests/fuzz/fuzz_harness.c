@@ -177,7 +177,10 @@ static int expect_features(const void *data, size_t size, fz_expected_t *e) {
         return 0;
     }
     if (!n->pipe.have_camera || m->camera_id != n->camera_id) return 0;
-    if (m->utime <= n->pipe.last_frame_utime) return 0;
+    /* the time policy (sfd_time_guard.h), on a copy of the frame stream's guard */
+    sfd_time_guard_t guard = n->pipe.frame_time;
+    const sfd_time_verdict_t tv = sfd_time_guard_check(&guard, m->utime, &n->pipe.imu_time);
+    if (tv == SFD_TIME_ORDER || tv == SFD_TIME_JUMP) return 0;
     e->utime = m->utime;
     e->camera_id = m->camera_id;
     e->num_features = m->num_features;

@@ -250,6 +250,158 @@ static void judge_equals_the_three_stages_bit_for_bit(void **state) {
     assert_int_equal(g_p.nav.win_gated, 1);
 }
 
+/* Feeds frames f0..f1 of the scene with every time shifted by offset_us (IMU up to each frame
+ * first), judging every due frame. Returns the frames accepted; *judged counts the verdicts. */
+static int feed(sfd_pipeline_t *p, sfd_prng_t *rng, int *k, int f0, int f1, int64_t offset_us,
+                int *judged) {
+    int accepted = 0;
+    for (int f = f0; f <= f1; ++f) {
+        make_frame(rng, f, &g_frame);
+        g_frame.utime += offset_us;
+        sfd_imu_sample_t s;
+        do {
+            imu_sample(rng, ++*k, &s);
+            s.t_us += offset_us;
+            (void)sfd_pipeline_push_imu(p, &s);
+        } while (s.t_us < g_frame.utime);
+        accepted += sfd_pipeline_push_frame(p, &g_frame) == SFD_REJECT_NONE;
+        while (sfd_pipeline_frames_due(p) > 0) {
+            assert_status(sfd_pipeline_judge(p), SFD_OK);
+            ++*judged;
+        }
+    }
+    return accepted;
+}
+
+/* GIVEN a running pipeline WHEN one frame is stamped 1000 s ahead, one INT64_MAX and one IMU
+ * sample INT64_MAX THEN each is refused as time_jump and never becomes the reference: every later
+ * frame is accepted and judged, the filter keeps running, nothing restarts. (Before the policy,
+ * one future frame made every later frame "out of order".) */
+static void a_future_stamped_message_is_refused_and_never_the_reference(void **state) {
+    (void)state;
+    start(&g_p);
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 11);
+    int k = 0, judged = 0;
+    assert_int_equal(feed(&g_p, &rng, &k, 1, 40, 0, &judged), 40);
+    const int starts = g_p.nav.starts;
+    make_frame(&rng, 41, &g_frame);
+    g_frame.utime += 1000 * 1000000LL;
+    assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_TIME_JUMP);
+    g_frame.utime = INT64_MAX;
+    assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_TIME_JUMP);
+    sfd_imu_sample_t s;
+    imu_sample(&rng, k + 1, &s);
+    s.t_us = INT64_MAX;
+    assert_int_equal(sfd_pipeline_push_imu(&g_p, &s), SFD_REJECT_TIME_JUMP);
+    s.t_us = INT64_MIN;
+    assert_int_equal(sfd_pipeline_push_imu(&g_p, &s), SFD_REJECT_TIME_JUMP);
+    judged = 0;
+    assert_int_equal(feed(&g_p, &rng, &k, 41, 80, 0, &judged), 40);
+    assert_int_equal(judged, 40);
+    assert_true(g_p.counters.rejected[SFD_REJECT_TIME_JUMP] == 4);
+    assert_true(g_p.counters.rejected[SFD_REJECT_RESTART] == 0);
+    assert_true(g_p.counters.rejected[SFD_REJECT_ORDER] == 0);
+    assert_int_equal(g_p.nav.starts, starts);
+    assert_int_equal(sfd_pipeline_output(&g_p)->has_state, 1);
+    assert_int_equal(sfd_pipeline_output(&g_p)->verdict.num_untested, 0);
+}
+
+/* GIVEN a running pipeline WHEN the publisher restarts (IMU and frames 3 s back in time, as a
+ * restarted log or clock) THEN the first N - 1 IMU samples and frames are refused as time_jump,
+ * the N-th of each is the new time base (two restarts counted: IMU side, frame side), every later
+ * frame is judged and the filter starts again from rest. A message merely reordered within the
+ * horizon stays an order rejection. */
+static void a_restarted_publisher_is_followed_after_n_messages(void **state) {
+    (void)state;
+    start(&g_p);
+    const int n = g_p.cfg.time.resync_messages;
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 12);
+    int k = 0, judged = 0;
+    assert_int_equal(feed(&g_p, &rng, &k, 1, 80, 0, &judged), 80);
+    assert_int_equal(judged, 80);
+    make_frame(&rng, 79, &g_frame); /* reordered, 50 ms back: order, not a jump */
+    assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_ORDER);
+    const int starts = g_p.nav.starts;
+    judged = 0;
+    /* frames 81..160 stamped 3 s earlier than they would be: times 1.05 s .. 5 s again */
+    const int accepted = feed(&g_p, &rng, &k, 81, 160, -3000000, &judged);
+    assert_int_equal(accepted, 80 - (n - 1));
+    assert_int_equal(judged, accepted);
+    assert_true(g_p.counters.rejected[SFD_REJECT_TIME_JUMP] == (n - 1) + (n - 1));
+    assert_true(g_p.counters.rejected[SFD_REJECT_RESTART] == 2);
+    assert_true(g_p.counters.rejected[SFD_REJECT_ORDER] == 1);
+    assert_int_equal(g_p.nav.starts, starts + 1); /* from rest in the new time base */
+    assert_int_equal(sfd_pipeline_output(&g_p)->has_state, 1);
+    assert_int_equal(sfd_pipeline_output(&g_p)->verdict.num_untested, 0);
+}
+
+/* GIVEN the single-state EKF started at the true state (sfd_pipeline_start_at) and every track's
+ * point given as a known landmark WHEN OPRF judges the hovering scene THEN the filter runs from
+ * the first frame (no rest to wait for), every feature after the first frame is tested except a
+ * track flagged in the frame before (its observation is dropped), the jumped track is flagged, the
+ * known points are never refined (bit for bit as given), and the position stays within 1 cm; a
+ * landmark with a covariance that is not positive definite is refused. */
+static void a_known_map_and_start_localize_from_the_first_frame(void **state) {
+    (void)state;
+    sfd_pipeline_config_t cfg;
+    config(&cfg);
+    cfg.params.method = SFD_METHOD_OPRF;
+    cfg.nav.window_filter = 0;
+    cfg.nav.consider_position = 0;
+    assert_status(sfd_pipeline_init(&g_p, &cfg), SFD_OK);
+    sfd_camera_t cam;
+    sfd_extrinsics_t ext;
+    camera(&cam, &ext);
+    assert_int_equal(sfd_pipeline_set_camera(&g_p, &cam, &ext), SFD_REJECT_NONE);
+    const double zero[3] = {0, 0, 0}, q[4] = {1, 0, 0, 0};
+    assert_status(sfd_pipeline_start_at(&g_p, 0, zero, zero, q, zero, zero, NULL), SFD_OK);
+    const double cov[9] = {1e-4, 0, 0, 0, 1e-4, 0, 0, 0, 1e-4};
+    const double bad_cov[9] = {1e-4, 0, 0, 0, -1e-4, 0, 0, 0, 1e-4};
+    double L0[3] = {0, 0, 0};
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 13);
+    int k = -1, flagged = 0, prev_spurious = 0;
+    for (int f = 1; f <= 60; ++f) {
+        make_frame(&rng, f, &g_frame);
+        for (int i = 0; i < NPTS; ++i) {
+            /* the scene's point i: normalized (x, y) at depth d; camera z = IMU x, x = -y, y = -z
+             */
+            const double x = -0.5 + (double)(i % 10) / 9.0,
+                         y = -0.35 + 0.7 * (double)(i - i % 10) / 50.0,
+                         d = 4.0 + 4.0 * (double)(i % 7) / 6.0;
+            const double L[3] = {d, -x * d, -y * d};
+            if (i == 0) memcpy(L0, L, sizeof L0);
+            assert_status(sfd_pipeline_known_landmark(&g_p, 100 + i, L, cov, g_frame.utime),
+                          SFD_OK);
+        }
+        assert_status(sfd_pipeline_known_landmark(&g_p, 999, L0, bad_cov, g_frame.utime),
+                      SFD_ERR_INVAL);
+        sfd_imu_sample_t s;
+        do {
+            imu_sample(&rng, ++k, &s);
+            assert_int_equal(sfd_pipeline_push_imu(&g_p, &s), SFD_REJECT_NONE);
+        } while (s.t_us < g_frame.utime);
+        assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_NONE);
+        assert_status(sfd_pipeline_judge(&g_p), SFD_OK);
+        const sfd_pipeline_output_t *o = sfd_pipeline_output(&g_p);
+        assert_int_equal(o->has_state, 1);
+        /* untested: only tracks flagged in the previous frame (their observation was dropped) */
+        if (f >= 2) assert_true(o->verdict.num_untested <= prev_spurious);
+        prev_spurious = o->verdict.num_spurious;
+        if (f >= JUMP_FRAME)
+            flagged += o->verdict.features[JUMP_TRACK].status == SFD_VERDICT_SPURIOUS;
+    }
+    assert_true(flagged >= 1);
+    const int32_t li = sfd_landmark_find(&g_p.nav.map, 100);
+    assert_true(li >= 0);
+    assert_int_equal(g_p.nav.map.entries[li].fixed, 1);
+    assert_memory_equal(g_p.nav.map.entries[li].p_W_m, L0, sizeof L0);
+    for (int j = 0; j < 3; ++j) assert_true(fabs(sfd_pipeline_output(&g_p)->p_IinW_m[j]) < 0.01);
+    assert_int_equal(g_p.nav.starts, 1);
+}
+
 /* GIVEN null arguments or a method that needs the filter with the filter off THEN init refuses. */
 static void init_refuses_invalid_configurations(void **state) {
     (void)state;
@@ -259,6 +411,12 @@ static void init_refuses_invalid_configurations(void **state) {
     assert_status(sfd_pipeline_init(&g_p, NULL), SFD_ERR_INVAL);
     cfg.nav.enabled = 0;
     cfg.params.method = SFD_METHOD_OPRF;
+    assert_status(sfd_pipeline_init(&g_p, &cfg), SFD_ERR_INVAL);
+    config(&cfg);
+    cfg.time.horizon_us = 0;
+    assert_status(sfd_pipeline_init(&g_p, &cfg), SFD_ERR_INVAL);
+    config(&cfg);
+    cfg.time.resync_messages = 1;
     assert_status(sfd_pipeline_init(&g_p, &cfg), SFD_ERR_INVAL);
     assert_int_equal(sfd_pipeline_frames_due(NULL), 0);
     assert_null(sfd_pipeline_output(NULL));
@@ -272,6 +430,9 @@ int main(void) {
         cmocka_unit_test(stages_keep_their_order_and_slots_are_bounded),
         cmocka_unit_test(judge_equals_the_three_stages_bit_for_bit),
         cmocka_unit_test(init_refuses_invalid_configurations),
+        cmocka_unit_test(a_future_stamped_message_is_refused_and_never_the_reference),
+        cmocka_unit_test(a_restarted_publisher_is_followed_after_n_messages),
+        cmocka_unit_test(a_known_map_and_start_localize_from_the_first_frame),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -35,5 +35,6 @@
 #include "sfd_ransac.h"
 #include "sfd_rotation.h"
 #include "sfd_status.h"
+#include "sfd_time_guard.h"
 
 #endif /* SFD_H */

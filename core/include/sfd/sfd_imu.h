@@ -23,6 +23,23 @@ typedef struct {
     double accel_m_s2[3]; /**< specific force (m/s^2) */
 } sfd_imu_sample_t;
 
+/** A time-ordered run of samples held in at most two contiguous pieces (a ring buffer that
+ *  wraps: the tail of its array, then its head), read in place without a copy. */
+typedef struct {
+    const sfd_imu_sample_t *piece[2]; /**< piece[1] may be NULL when count[1] is 0 */
+    int32_t count[2];                 /**< samples in each piece, >= 0 */
+} sfd_imu_span_t;
+
+/** @brief Sample i (0 <= i < count[0] + count[1]) of a span. */
+static inline const sfd_imu_sample_t *sfd_imu_span_at(const sfd_imu_span_t *span, int32_t i) {
+    return (i < span->count[0]) ? &span->piece[0][i] : &span->piece[1][i - span->count[0]];
+}
+
+/** @brief Samples in a span. */
+static inline int32_t sfd_imu_span_count(const sfd_imu_span_t *span) {
+    return span->count[0] + span->count[1];
+}
+
 /**
  * @brief Orientation change of the IMU between t0_us and t1_us from gyro samples: the unit
  *        quaternion q_I1toI0 (IMU frame at t1 expressed in the IMU frame at t0).
@@ -48,6 +65,13 @@ typedef struct {
 sfd_status_t sfd_gyro_integrate(const sfd_imu_sample_t *samples, size_t n, int64_t t0_us,
                                 int64_t t1_us, const double bias_rad_s[3], int64_t max_gap_us,
                                 double q_I1toI0[4]);
+
+/** @brief sfd_gyro_integrate() over a span (the samples in place in a ring buffer); the same
+ *         model, checks and results bit for bit. SFD_ERR_INVAL also for a negative piece count
+ *         or a null piece with a positive count. */
+sfd_status_t sfd_gyro_integrate_span(const sfd_imu_span_t *span, int64_t t0_us, int64_t t1_us,
+                                     const double bias_rad_s[3], int64_t max_gap_us,
+                                     double q_I1toI0[4]);
 
 #ifdef __cplusplus
 }

@@ -18,9 +18,12 @@
 extern "C" {
 #endif
 
-/** Samples kept: 2048 = 10.24 s at 200 Hz (56 B each, 112 KiB). */
+/** Samples kept: 512 = 2.56 s at 200 Hz (56 B each, 28 KiB). The ring must span the rest
+ *  window of the filter's start (init_rest_s, 0.5 s) plus one frame interval and the transport's
+ *  lead of IMU over features; a faster IMU (1 kHz: 0.51 s) needs a larger -DSFD_IMU_RING_CAPACITY.
+ *  Readers take the samples in place (sfd_imu_ring_span), so no copy of them is kept. */
 #ifndef SFD_IMU_RING_CAPACITY
-#define SFD_IMU_RING_CAPACITY 2048
+#define SFD_IMU_RING_CAPACITY 512
 #endif
 
 typedef struct {
@@ -62,6 +65,17 @@ void sfd_imu_ring_set_needed(sfd_imu_ring_t *ring, int64_t t_us);
 int64_t sfd_imu_ring_newest(const sfd_imu_ring_t *ring);
 
 /**
+ * @brief The samples that cover [t0_us, t1_us], in place: from the last sample at or before t0
+ *        to the first at or after t1, as a span (valid until the next push).
+ * @return SFD_REJECT_NONE (*span set); SFD_REJECT_IMU_LATE when no sample at or after t1 has
+ *         arrived yet (wait, or give up after the configured time); SFD_REJECT_IMU_GAP when the
+ *         ring no longer (or never) held a sample at or before t0; SFD_REJECT_CAPACITY when more
+ *         than @p cap samples would be needed.
+ */
+int sfd_imu_ring_span(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us, int32_t cap,
+                      sfd_imu_span_t *span);
+
+/**
  * @brief Copies the samples that cover [t0_us, t1_us]: from the last sample at or before t0 to
  *        the first at or after t1, into @p out (capacity @p cap).
  * @return SFD_REJECT_NONE (*n set); SFD_REJECT_IMU_LATE when no sample at or after t1 has arrived
@@ -74,17 +88,16 @@ int sfd_imu_ring_window(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us
 
 /**
  * @brief Camera motion between two frames for the detector: the IMU rotation integrated from the
- *        gyro (bias subtracted, ends interpolated) over [t_prev_us, t_cur_us], expressed for the
- *        camera through the extrinsics. Translation is left unknown.
- * @param scratch  caller storage for @p cap samples, 2..SFD_MAX_IMU_SAMPLES (the ring never
- *                 holds more than SFD_IMU_RING_CAPACITY).
- * @return SFD_REJECT_NONE; the reasons of sfd_imu_ring_window(); SFD_REJECT_IMU_GAP also for a gap
- *         between samples larger than @p max_gap_us inside the interval.
+ *        gyro (bias subtracted, ends interpolated) over [t_prev_us, t_cur_us] from the ring's
+ *        samples in place, expressed for the camera through the extrinsics. Translation is left
+ *        unknown.
+ * @return SFD_REJECT_NONE; the reasons of sfd_imu_ring_span() (SFD_REJECT_CAPACITY: more than
+ *         SFD_MAX_IMU_SAMPLES in the interval); SFD_REJECT_IMU_GAP also for a gap between samples
+ *         larger than @p max_gap_us inside the interval.
  */
 int sfd_assemble_motion(const sfd_imu_ring_t *ring, const sfd_extrinsics_t *ext,
                         const double gyro_bias_rad_s[3], int64_t t_prev_us, int64_t t_cur_us,
-                        int64_t max_gap_us, sfd_imu_sample_t *scratch, int32_t cap,
-                        sfd_frame_motion_t *motion);
+                        int64_t max_gap_us, sfd_frame_motion_t *motion);
 
 #ifdef __cplusplus
 }

@@ -133,8 +133,7 @@ void sfd_nav_set_camera(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_extri
  *         filter refused (it is then stopped and restarts from gravity later; counted in
  *         `starts`). SFD_REJECT_NONE also when it just started (no prior to associate yet).
  */
-int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
-                    sfd_imu_sample_t *scratch, int32_t cap);
+int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us);
 
 /**
  * @brief A TRUTH pose (init_from_truth only; ignored otherwise or once running): the first one
@@ -143,6 +142,22 @@ int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us,
  *        cfg.init_accel_bias_m_s2.
  */
 void sfd_nav_truth(sfd_nav_t *nav, int64_t utime, const double p_m[3], const double q_wxyz[4]);
+
+/**
+ * @brief Starts (or restarts) the filter at a given state at @p utime instead of at rest: a
+ *        known start (evaluation, a filter handed over from another source). The landmarks
+ *        are kept; the next frame has no previous one.
+ * @param p0_diag nullable: initial variances (SFD_EKF_IDX_* order); for the window filter they
+ *        replace its parameters' P0, and the attitude's are then of its global error (the same
+ *        as the local ones when the three are equal); NULL: cfg.p0_diag (the window filter: its
+ *        own P0).
+ * @return SFD_OK; SFD_ERR_INVAL for null, non-finite values or a zero quaternion; SFD_ERR_STATE
+ *         when the filter is not enabled; the filter's refusal otherwise (then not started).
+ */
+sfd_status_t sfd_nav_start_at(sfd_nav_t *nav, int64_t utime, const double p_m[3],
+                              const double v_m_s[3], const double q_ItoW[4],
+                              const double bg_rad_s[3], const double ba_m_s2[3],
+                              const double p0_diag[SFD_EKF_DIM]);
 
 /**
  * @brief Matches of the frame: features (not excluded by @p skip, nullable) whose track was in
@@ -158,9 +173,10 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
 
 /**
  * @brief After the association: refines the landmarks of the features judged CONSISTENT with
- *        the posterior camera pose (gated), creates landmarks for features without one (depth
- *        prior or the default), drops landmarks unseen for landmark_max_age_s, and keeps the
- *        non-SPURIOUS observations as the next frame's previous ones.
+ *        the posterior camera pose (gated; a known landmark, sfd_landmark_set(), is not refined),
+ * creates landmarks for features without one (depth prior or the default), drops landmarks unseen
+ * for landmark_max_age_s, and keeps the non-SPURIOUS observations as the next frame's previous
+ * ones.
  * @param status per feature, SFD_VERDICT_* (the frame's final verdicts).
  */
 void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *status);

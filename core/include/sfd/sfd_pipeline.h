@@ -42,22 +42,19 @@
 #include "sfd_parity.h"
 #include "sfd_reject.h"
 #include "sfd_status.h"
+#include "sfd_time_guard.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/** IMU samples one frame interval (or the rest before the filter's start) may span: no more
- *  than the ring holds, nor than the integrators take. */
-#define SFD_PIPELINE_IMU_SCRATCH \
-    (SFD_IMU_RING_CAPACITY < SFD_MAX_IMU_SAMPLES ? SFD_IMU_RING_CAPACITY : SFD_MAX_IMU_SAMPLES)
-
 /** Frames the pipeline holds between push_frame and the end of its judgement. */
 #define SFD_PIPELINE_FRAME_SLOTS 2
 
 typedef struct {
-    sfd_params_t params;  /**< detector (method: any sfd_method_t) */
-    sfd_nav_config_t nav; /**< the filter (required by oprf, ransac1, ransacf, both) */
+    sfd_params_t params;          /**< detector (method: any sfd_method_t) */
+    sfd_nav_config_t nav;         /**< the filter (required by oprf, ransac1, ransacf, both) */
+    sfd_time_guard_params_t time; /**< time-glitch policy of both input streams */
 } sfd_pipeline_config_t;
 
 /** Counters since init. The transport adds what it saw before the pipeline (messages received,
@@ -99,15 +96,19 @@ typedef struct {
     sfd_camera_t camera;
     sfd_extrinsics_t ext;
     int32_t have_camera;
-    int64_t last_imu_utime;   /**< newest accepted IMU sample (us) */
-    int64_t last_frame_utime; /**< newest accepted frame (us) */
-    int64_t prev_frame_utime; /**< the last judged frame (us) */
+    sfd_time_guard_t imu_time;   /**< time-glitch policy of the IMU stream */
+    sfd_time_guard_t frame_time; /**< and of the frames */
+    int64_t last_imu_utime;      /**< newest accepted IMU sample (us), INT64_MIN before */
+    int64_t last_frame_utime;    /**< newest accepted frame (us), INT64_MIN before */
+    int64_t prev_frame_utime;    /**< the last judged frame (us) */
     int32_t have_prev_frame;
     /* frames held: waiting for IMU or due, judged oldest first */
     sfd_frame_t frames[SFD_PIPELINE_FRAME_SLOTS];
-    int32_t slot_state[SFD_PIPELINE_FRAME_SLOTS];  /**< sfd_pipeline_slot_state_t */
-    int32_t slot_reason[SFD_PIPELINE_FRAME_SLOTS]; /**< due: SFD_REJECT_NONE or why no IMU */
-    uint32_t slot_seq[SFD_PIPELINE_FRAME_SLOTS];   /**< arrival order */
+    int32_t slot_state[SFD_PIPELINE_FRAME_SLOTS];   /**< sfd_pipeline_slot_state_t */
+    int32_t slot_reason[SFD_PIPELINE_FRAME_SLOTS];  /**< due: SFD_REJECT_NONE or why no IMU */
+    uint32_t slot_seq[SFD_PIPELINE_FRAME_SLOTS];    /**< arrival order */
+    int32_t slot_restart[SFD_PIPELINE_FRAME_SLOTS]; /**< 1: the first frame of a new time base:
+                                                        the frame side restarts before it */
     uint32_t next_seq;
     /* the frame being judged */
     int32_t cur_slot; /**< -1: none */
@@ -120,16 +121,17 @@ typedef struct {
     /* scratch */
     int8_t final_status[SFD_MAX_FEATURES];
     uint8_t skip[SFD_MAX_FEATURES];
-    sfd_imu_sample_t imu_scratch[SFD_PIPELINE_IMU_SCRATCH];
 } sfd_pipeline_t;
 
-/** @brief Defaults: sfd_params_default() and sfd_nav_config_default(). */
+/** @brief Defaults: sfd_params_default(), sfd_nav_config_default(),
+ *         sfd_time_guard_params_default(). */
 void sfd_pipeline_config_default(sfd_pipeline_config_t *cfg);
 
 /**
  * @brief Initializes the pipeline; the detector starts with the first sfd_pipeline_set_camera().
- * @return SFD_OK; SFD_ERR_INVAL for null arguments, invalid parameters, or a method that needs
- *         the filter (OPRF, RANSAC1, RANSACF, BOTH) with cfg->nav.enabled = 0.
+ * @return SFD_OK; SFD_ERR_INVAL for null arguments, invalid parameters (detector, filter, time
+ *         policy), or a method that needs the filter (OPRF, RANSAC1, RANSACF, BOTH) with
+ *         cfg->nav.enabled = 0.
  */
 sfd_status_t sfd_pipeline_init(sfd_pipeline_t *p, const sfd_pipeline_config_t *cfg);
 
@@ -143,19 +145,28 @@ int sfd_pipeline_set_camera(sfd_pipeline_t *p, const sfd_camera_t *cam,
                             const sfd_extrinsics_t *ext);
 
 /**
- * @brief One IMU sample. A waiting frame whose time it reaches becomes due.
- * @return SFD_REJECT_NONE; SFD_REJECT_ORDER (not after the previous sample: dropped);
- *         SFD_REJECT_IMU_OVERFLOW (stored, but the ring overwrote a sample a frame may need).
- *         Every reason is counted.
+ * @brief One IMU sample. A waiting frame whose time it reaches becomes due. Its time is judged by
+ *        the time-glitch policy (sfd_time_guard.h, docs/time_glitches.md); the sample that makes
+ *        a new time base (a restarted IMU) empties the ring and stops the filter (it restarts
+ *        from rest), and a waiting frame becomes due without IMU (imu_gap); counted as restart.
+ * @return SFD_REJECT_NONE; SFD_REJECT_ORDER (not after the previous sample, within the horizon:
+ *         dropped); SFD_REJECT_TIME_JUMP (farther than the horizon: dropped, never the
+ *         reference); SFD_REJECT_IMU_OVERFLOW (stored, but the ring overwrote a sample a frame
+ *         may need). Every reason is counted.
  */
 int sfd_pipeline_push_imu(sfd_pipeline_t *p, const sfd_imu_sample_t *sample);
 
 /**
- * @brief One feature frame (copied). A waiting frame becomes due first, without IMU.
+ * @brief One feature frame (copied). A waiting frame becomes due first, without IMU. Its time is
+ *        judged by the time-glitch policy (sfd_time_guard.h); the frame that makes a new time base
+ *        (a restarted camera or publisher) is accepted, and before it is judged the frame side
+ *        restarts (parity window, filter, tracks; counted as restart), after the frames of the
+ *        old time base.
  * @return SFD_REJECT_NONE (due or waiting); SFD_REJECT_NO_CAMERA_INFO (no calibration yet);
- *         SFD_REJECT_ORDER (not after the previous frame); SFD_REJECT_CAPACITY (more than
- *         SFD_MAX_FEATURES features, or no free slot: due frames were not judged). Every reason
- *         is counted; a refused frame gets no verdict.
+ *         SFD_REJECT_ORDER (not after the previous frame, within the horizon);
+ *         SFD_REJECT_TIME_JUMP (farther than the horizon from the streams); SFD_REJECT_CAPACITY
+ *         (more than SFD_MAX_FEATURES features, or no free slot: due frames were not judged).
+ *         Every reason is counted; a refused frame gets no verdict.
  */
 int sfd_pipeline_push_frame(sfd_pipeline_t *p, const sfd_frame_t *frame);
 
@@ -168,6 +179,29 @@ void sfd_pipeline_flush(sfd_pipeline_t *p);
  */
 void sfd_pipeline_truth(sfd_pipeline_t *p, int64_t utime, const double p_m[3],
                         const double q_wxyz[4]);
+
+/**
+ * @brief Starts the filter at a known state at @p utime instead of at rest (sfd_nav_start_at():
+ *        a filter handed over from another source, or evaluation from a known start). IMU from
+ *        @p utime on propagates it; frames before it are judged without the filter.
+ * @return as sfd_nav_start_at(); SFD_ERR_STATE also while a frame is being judged.
+ */
+sfd_status_t sfd_pipeline_start_at(sfd_pipeline_t *p, int64_t utime, const double p_m[3],
+                                   const double v_m_s[3], const double q_ItoW[4],
+                                   const double bg_rad_s[3], const double ba_m_s2[3],
+                                   const double p0_diag[SFD_EKF_DIM]);
+
+/**
+ * @brief A known landmark of a track (map-based localization: a surveyed map): the association
+ *        methods match the track against it and the filter is updated with it; it is never
+ *        refined. Call it before the frame that observes the track (again after a frame that
+ *        judged the track SPURIOUS, which drops its landmark, or after a new calibration,
+ *        which empties the map). Works with the single-state EKF (filter.window_filter = 0);
+ *        the window filter triangulates its own points and does not read the map.
+ * @return as sfd_landmark_set(); SFD_ERR_STATE when the filter is not enabled.
+ */
+sfd_status_t sfd_pipeline_known_landmark(sfd_pipeline_t *p, int64_t track_id, const double p_W_m[3],
+                                         const double cov_m2[9], int64_t utime);
 
 /** @brief Frames due for judgement (0..SFD_PIPELINE_FRAME_SLOTS). */
 int32_t sfd_pipeline_frames_due(const sfd_pipeline_t *p);

@@ -28,7 +28,11 @@ typedef enum {
     SFD_REJECT_IMU_OVERFLOW = 9,   /**< IMU ring full: a sample a frame may need overwritten */
     SFD_REJECT_CAPACITY = 10,      /**< more features than the core's SFD_MAX_FEATURES */
     SFD_REJECT_CORE = 11,          /**< the core refused the frame (status code) */
-    SFD_REJECT_NUM_REASONS = 12
+    SFD_REJECT_TIME_JUMP = 12,     /**< utime farther than the horizon from its stream (a glitch,
+                                        or one of the first messages of a restarted stream) */
+    SFD_REJECT_RESTART = 13,       /**< not a message: the pipeline's frame or IMU side restarted
+                                        on a new time base (sfd_time_guard.h) */
+    SFD_REJECT_NUM_REASONS = 14
 } sfd_reject_reason_t;
 
 /** Name of a rejection reason ("decode", "count", ...); "unknown" out of range. */
