@@ -7,7 +7,7 @@ usage: plot_thesis.py DIR    reads DIR/thesis_rmse.csv and DIR/thesis_time.csv, 
   fig4 time vs measurement noise     fig5 position RMSE vs measurement noise
   fig6 time vs control input noise   fig7 position RMSE vs control input noise
   fig8 time vs mismatch ratio        fig9 position RMSE vs mismatch ratio
-Time = wall clock of sfd_assoc_run per frame (association + EKF update), mean (solid) and
+Time = wall clock per frame of the pipeline's association and update stages (association + EKF update), mean (solid) and
 median (dotted). The thesis's ranges are shaded. Lines starting with '#' in the CSVs (the unit
 definitions) are skipped.
 """
@@ -66,7 +66,7 @@ def figure(d, rows, sweep, rng, xlabel, num, kind):
     ax.set_title(f'Figure {num}: {title} vs {sweep}', fontsize=10)
     ax.set_xlabel(xlabel)
     if kind == 'time':
-        ax.set_ylabel('time per frame (µs), sfd_assoc_run incl. EKF update')
+        ax.set_ylabel('time per frame (µs), association + EKF update')
         ax.set_yscale('log')
     else:
         ax.set_ylabel('EKF position RMSE (mm)')

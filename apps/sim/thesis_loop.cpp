@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: MIT
-// sfd-sim thesis-loop: Kilic 2014 Chapter IV (Figures 3-9) through sfd's core. Association
-// methods (sfd_assoc.h: OPRF, RANSAC1, RANSACF, NONE) run inside an EKF localization loop over a
-// ground-truth trajectory and a landmark map, with controlled noise. Three sweeps: (a) measurement
-// noise, (b) control input (IMU) noise, (c) mismatch ratio. Per method and sweep point: the mean
-// wall-clock time of sfd_assoc_run per frame (it includes the EKF camera update) and the RMSE of
-// the EKF position. The note apps/sim/THESIS_LOOP.md repeats these choices without core detail.
+// sfd-sim thesis-loop: Kilic 2014 Chapter IV (Figures 3-9) through sfd's pipeline
+// (sfd_pipeline.h, as sfd-node runs it). Association methods (OPRF, RANSAC1, RANSACF, NONE) run
+// inside an EKF localization loop over a ground-truth trajectory and a known landmark map, with
+// controlled noise. Three sweeps: (a) measurement noise, (b) control input (IMU) noise, (c)
+// mismatch ratio. Per method and sweep point: the mean wall-clock time per frame of the
+// pipeline's association and update stages (the association, the EKF camera update and the
+// track bookkeeping) and the RMSE of the EKF position. The note apps/sim/THESIS_LOOP.md repeats
+// these choices without core detail.
 //
 // The thesis fixes the loop (Figure 3: noise on the inputs, EKF predict, association, EKF
 // update), the criteria (association time, position RMSE) and the ranges ("measurement noise and
@@ -54,14 +56,25 @@
 // densities = the injected ones but at least sfd_ekf_noise_default()'s (which also covers the
 // zero-order hold at 0 % control noise), default bias random walks. Association: the defaults of
 // sfd_assoc_params_default() (alpha 0.01, p 0.99, 100 hypotheses, 1 px minimum parallax), seeded
-// per run. The previous camera pose handed to sfd_assoc_run is the filter's posterior.
+// per run. The previous camera pose the association gets is the filter's posterior.
+// Through the pipeline: IMU samples and frames are pushed in time order (one more IMU sample, at
+// the last frame's time, covers it); the single-state EKF is started at the perturbed truth with
+// sfd_pipeline_start_at(); every feature's map point is given with sfd_pipeline_known_landmark()
+// (never refined) before its frame. A frame holds the matches (map order, the mismatched current
+// pixels included) and then the other visible landmarks, up to SFD_MAX_FEATURES. Two
+// differences from a direct association call: a match's previous pixel is the previous frame's
+// feature, which is a mismatched pixel when that landmark was mismatched (and accepted) in the
+// previous frame; a feature judged SPURIOUS has no previous observation in the next frame (the
+// pipeline keeps only non-SPURIOUS ones), so it is not matched there. A mismatch left UNTESTED
+// counts as accepted.
 // Sweeps (the other two levels at the nominal 10 % measurement, 5 % control, 10 % mismatch, the
 // middles of the thesis's ranges): (a) 5, 10, 15, 20 and beyond 30, 40, 50 %; (b) 0, 2.5, 5, 7.5,
 // 10 and beyond 15, 20, 30 %; (c) 0, 5, 10, 15, 20 and beyond 30, 40, 50 %. --quick: 5, 20 / 0,
 // 10 / 0, 30 with 200 frames and 2 runs.
 // Criteria: position RMSE = sqrt of the mean over all frames (after each update) and runs of
 // |p_est - p_true|^2 (IMU position); its standard error from the per-run RMSEs. Time = wall clock
-// (steady_clock) around sfd_assoc_run, mean and median over all frames and runs, in a separate
+// (steady_clock) around sfd_pipeline_associate() + sfd_pipeline_update(), mean and median over
+// all frames and runs, in a separate
 // CSV: thesis_rmse.csv is byte-identical for the same binary and arguments, thesis_time.csv is not.
 // Claim check (computed): at each point, "OPRF's RMSE below F-matrix RANSAC's and below no
 // association's" holds when OPRF's pooled RMSE is below both; a difference smaller than twice the
@@ -266,8 +279,21 @@ uint64_t stream_seed(uint64_t base, int run, int stream) {
 }
 
 // ---- one run's data (identical for every method) ----
+// One feature of a frame handed to the pipeline: the landmark it observes (its track id) and the
+// observed pixel (a mismatch's is another landmark's).
+struct FrameFeature {
+    int32_t landmark;
+    double uv[2];
+    uint8_t mismatched;
+};
+
 struct RunData {
     sfd_ekf_t ekf0{};
+    sfd_ekf_noise_t noise{};         // the filter's IMU noise
+    double P0[SFD_EKF_DIM] = {};     // its initial variances
+    std::vector<double> lmap;        // the filter's map: 3 per landmark
+    std::vector<FrameFeature> feat;  // frame f (0..frames) in [fbegin[f], fbegin[f + 1])
+    std::vector<size_t> fbegin;
     std::vector<double> imu;          // 6 per sample: gyro, accel (noisy)
     std::vector<sfd_match_t> m;       // matches of every frame, frame f in [begin[f-1], begin[f])
     std::vector<uint8_t> mismatched;  // per match
@@ -344,9 +370,13 @@ bool make_run(const Sigmas &sg, uint64_t base, int run, int frames, RunData *rd)
     mul3(t0.R_ItoW, dR, R0);
     sfd_rotmat_to_quat(R0, q0);
     if (sfd_ekf_init(&rd->ekf0, &nz, p0, v0, q0, bg, ba, P0) != SFD_OK) return false;
+    rd->noise = nz;
+    std::copy(P0, P0 + SFD_EKF_DIM, rd->P0);
+    rd->lmap = Lmap;
 
-    // IMU: truth + white noise, sample k at t_k.
-    const size_t n_imu = static_cast<size_t>(frames) * kImuPerFrame;
+    // IMU: truth + white noise, sample k at t_k; one more than the frames consume, at the last
+    // frame's time, so that the IMU covers it (its value is held after that frame only).
+    const size_t n_imu = static_cast<size_t>(frames) * kImuPerFrame + 1;
     rd->imu.assign(6 * n_imu, 0.0);
     for (size_t k = 0; k < n_imu; ++k) {
         const Truth tk = truth_at(static_cast<double>(k) * kImuDt);
@@ -359,6 +389,9 @@ bool make_run(const Sigmas &sg, uint64_t base, int run, int frames, RunData *rd)
     rd->m.clear();
     rd->mismatched.clear();
     rd->begin.assign(1, 0);
+    rd->feat.clear();
+    rd->fbegin.assign(1, 0);
+    std::vector<uint8_t> in_frame(static_cast<size_t>(kLandmarks));
     rd->truth_p.assign(3 * (static_cast<size_t>(frames) + 1), 0.0);
     rd->flow_sum_px = 0.0;
     rd->flow_count = 0;
@@ -438,6 +471,27 @@ bool make_run(const Sigmas &sg, uint64_t base, int run, int frames, RunData *rd)
             }
             rd->begin.push_back(rd->m.size());
         }
+        // The frame for the pipeline: the matches (current pixels, mismatches included) in map
+        // order, then every other visible landmark in map order, up to SFD_MAX_FEATURES.
+        std::fill(in_frame.begin(), in_frame.end(), 0U);
+        if (f > 0) {
+            const size_t first = rd->begin[rd->begin.size() - 2];
+            for (size_t j = first; j < rd->m.size(); ++j) {
+                const size_t i = static_cast<size_t>(idx[j - first]);
+                const sfd_match_t &mt = rd->m[j];
+                rd->feat.push_back(FrameFeature{static_cast<int32_t>(i),
+                                                {mt.obs.uv_px[0], mt.obs.uv_px[1]},
+                                                rd->mismatched[j]});
+                in_frame[i] = 1U;
+            }
+        }
+        for (size_t i = 0; i < nL; ++i) {
+            if (rd->feat.size() - rd->fbegin.back() >= static_cast<size_t>(SFD_MAX_FEATURES)) break;
+            if (vis[i] == 0U || in_frame[i] != 0U) continue;
+            rd->feat.push_back(
+                FrameFeature{static_cast<int32_t>(i), {uv_obs[2 * i], uv_obs[2 * i + 1]}, 0U});
+        }
+        rd->fbegin.push_back(rd->feat.size());
         std::swap(vis, prev_vis);
         std::swap(uv_true, prev_true);
         std::swap(uv_obs, prev_obs);
@@ -459,51 +513,98 @@ struct MethodRun {
 };
 
 struct Workspace {
-    sfd_assoc_t assoc;
-    sfd_assoc_result_t res;
+    sfd_pipeline_t pipe;
+    sfd_frame_t frame;
 };
 
-bool run_method(int method, const RunData &rd, int frames, const sfd_ekf_camera_t &cam,
+// One method over one run through the pipeline (sfd_pipeline.h), as sfd-node runs it: IMU
+// samples and frames of features pushed in time order, the single-state EKF started at the run's
+// perturbed truth (sfd_pipeline_start_at) and the filter's map given as known landmarks
+// (sfd_pipeline_known_landmark) before each frame. Timed: the association and update stages.
+bool run_method(int method, const RunData &rd, int frames, const sfd_ekf_camera_t &ecam,
                 uint64_t assoc_seed, Workspace *ws, MethodRun *out) {
-    sfd_assoc_params_t ap;
-    sfd_assoc_params_default(&ap);
-    ap.method = method;
-    ap.seed = assoc_seed;
-    if (sfd_assoc_init(&ws->assoc, &ap) != SFD_OK) return false;
-    sfd_ekf_t ekf = rd.ekf0;
-    double prev_R[9], prev_p[3];
-    sfd_ekf_camera_pose(&ekf, &cam.ext, prev_R, prev_p);
+    sfd_pipeline_config_t cfg;
+    sfd_pipeline_config_default(&cfg);
+    cfg.params.method = method;
+    cfg.params.seed = assoc_seed;
+    cfg.params.pixel_sigma_px = ecam.pixel_sigma_px;
+    cfg.nav.window_filter = 0;      // the thesis's filter: one EKF state, a known map
+    cfg.nav.consider_position = 0;  // the known map holds absolute position information
+    cfg.nav.noise = rd.noise;
+    sfd_pipeline_t *p = &ws->pipe;
+    if (sfd_pipeline_init(p, &cfg) != SFD_OK) return false;
+    sfd_camera_t cam;
+    const double no_dist[4] = {0.0, 0.0, 0.0, 0.0};
+    if (sfd_camera_init(&cam, SFD_DISTORTION_PINHOLE, static_cast<int32_t>(kWidthPx),
+                        static_cast<int32_t>(kHeightPx), kFx, kFy, kCx, kCy, no_dist) != SFD_OK ||
+        sfd_pipeline_set_camera(p, &cam, &ecam.ext) != SFD_REJECT_NONE) {
+        return false;
+    }
+    const sfd_ekf_t &e0 = rd.ekf0;
+    if (sfd_pipeline_start_at(p, 0, e0.p_IinW_m, e0.v_IinW_m_s, e0.q_ItoW, e0.bg_rad_s, e0.ba_m_s2,
+                              rd.P0) != SFD_OK) {
+        return false;
+    }
+    double lm_cov[9] = {};
+    for (size_t k = 0; k < 3; ++k) lm_cov[4 * k] = kLandmarkSigmaM * kLandmarkSigmaM;
     out->times_us.reserve(static_cast<size_t>(frames));
-    for (int f = 1; f <= frames; ++f) {
-        for (int s = 0; s < kImuPerFrame; ++s) {
-            const double *u =
-                &rd.imu[6 * (static_cast<size_t>(f - 1) * kImuPerFrame + static_cast<size_t>(s))];
-            // A refused step (numeric trouble) leaves the filter unchanged and is counted in
-            // ekf.numeric_faults.
-            (void)sfd_ekf_propagate(&ekf, u, u + 3, kImuDt);
+    size_t next_imu = 0;
+    for (int f = 0; f <= frames; ++f) {
+        const int64_t t_us = static_cast<int64_t>(f) * kImuPerFrame * 5000;
+        for (; next_imu <= static_cast<size_t>(f) * kImuPerFrame; ++next_imu) {
+            sfd_imu_sample_t s{};
+            s.t_us = static_cast<int64_t>(next_imu) * 5000;
+            std::copy(&rd.imu[6 * next_imu], &rd.imu[6 * next_imu] + 3, s.gyro_rad_s);
+            std::copy(&rd.imu[6 * next_imu] + 3, &rd.imu[6 * next_imu] + 6, s.accel_m_s2);
+            if (sfd_pipeline_push_imu(p, &s) != SFD_REJECT_NONE) return false;
         }
-        const size_t b = rd.begin[static_cast<size_t>(f - 1)];
-        const int n = static_cast<int>(rd.begin[static_cast<size_t>(f)] - b);
-        const auto t0 = std::chrono::steady_clock::now();
-        const sfd_status_t st =
-            sfd_assoc_run(&ws->assoc, &ekf, &cam, prev_R, prev_p, &rd.m[b], n, &ws->res);
-        const auto t1 = std::chrono::steady_clock::now();
-        if (st != SFD_OK) {
-            std::fprintf(stderr, "sfd-sim thesis-loop: sfd_assoc_run failed (%d) at frame %d\n",
-                         static_cast<int>(st), f);
+        const size_t b = rd.fbegin[static_cast<size_t>(f)];
+        const int n = static_cast<int>(rd.fbegin[static_cast<size_t>(f) + 1] - b);
+        sfd_frame_t &fr = ws->frame;
+        fr.utime = t_us;
+        fr.num_features = n;
+        for (int j = 0; j < n; ++j) {
+            const FrameFeature &ff = rd.feat[b + static_cast<size_t>(j)];
+            sfd_feature_t &ft = fr.features[j];
+            ft.track_id = ff.landmark;
+            ft.u_px = ff.uv[0];
+            ft.v_px = ff.uv[1];
+            ft.depth_m = 0.0;
+            ft.depth_var_m2 = 0.0;
+            const double *L = &rd.lmap[3 * static_cast<size_t>(ff.landmark)];
+            if (sfd_pipeline_known_landmark(p, ff.landmark, L, lm_cov, t_us) != SFD_OK) {
+                return false;
+            }
+        }
+        if (sfd_pipeline_push_frame(p, &fr) != SFD_REJECT_NONE || sfd_pipeline_frames_due(p) != 1 ||
+            sfd_pipeline_detect(p) != SFD_OK) {
             return false;
         }
+        const auto t0 = std::chrono::steady_clock::now();
+        const sfd_status_t st1 = sfd_pipeline_associate(p);
+        const sfd_status_t st2 = sfd_pipeline_update(p);
+        const auto t1 = std::chrono::steady_clock::now();
+        const sfd_pipeline_output_t *o = sfd_pipeline_output(p);
+        if (st1 != SFD_OK || st2 != SFD_OK || o == nullptr || !o->has_state) {
+            std::fprintf(stderr, "sfd-sim thesis-loop: the pipeline failed at frame %d\n", f);
+            return false;
+        }
+        if (f == 0) continue;  // the start: no previous frame to match
         out->times_us.push_back(
             static_cast<double>(
                 std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count()) /
             1000.0);
-        out->hypotheses += ws->res.hypotheses_used;
-        for (int j = 0; j < n; ++j) {
-            const bool bad = rd.mismatched[b + static_cast<size_t>(j)] != 0U;
-            const int8_t s = ws->res.status[j];
+        out->hypotheses += o->hypotheses_used;
+        // The thesis's matches are the frame's first features (those seen in the previous frame
+        // too); a mismatch left UNTESTED counts as accepted (the strict rule).
+        const int n_match = static_cast<int>(rd.begin[static_cast<size_t>(f)] -
+                                             rd.begin[static_cast<size_t>(f) - 1]);
+        for (int j = 0; j < n_match && j < n; ++j) {
+            const bool bad = rd.feat[b + static_cast<size_t>(j)].mismatched != 0U;
+            const int8_t s = o->verdict.features[j].status;
             if (bad) {
                 ++out->mism_total;
-                out->mism_accepted += (s == SFD_VERDICT_CONSISTENT) ? 1 : 0;
+                out->mism_accepted += (s != SFD_VERDICT_SPURIOUS) ? 1 : 0;
             } else {
                 ++out->inl_total;
                 out->inl_rejected += (s == SFD_VERDICT_SPURIOUS) ? 1 : 0;
@@ -511,14 +612,13 @@ bool run_method(int method, const RunData &rd, int frames, const sfd_ekf_camera_
         }
         const double *tp = &rd.truth_p[3 * static_cast<size_t>(f)];
         double e2 = 0.0;
-        for (int k = 0; k < 3; ++k) e2 += (ekf.p_IinW_m[k] - tp[k]) * (ekf.p_IinW_m[k] - tp[k]);
+        for (int k = 0; k < 3; ++k) e2 += (o->p_IinW_m[k] - tp[k]) * (o->p_IinW_m[k] - tp[k]);
         out->sum_sq += e2;
         ++out->n_err;
         out->max_err = std::max(out->max_err, std::sqrt(e2));
         out->final_err = std::sqrt(e2);
-        sfd_ekf_camera_pose(&ekf, &cam.ext, prev_R, prev_p);
     }
-    out->numeric_faults = ekf.numeric_faults;
+    out->numeric_faults = p->nav.ekf.numeric_faults;
     return true;
 }
 
@@ -738,10 +838,12 @@ void write_csvs(FILE *rm, FILE *tm, const std::vector<Sweep> &sweeps, const Thes
                  "gyro_sigma_rad_s,accel_sigma_m_s2,method,runs,frames,rmse_m,rmse_se_m,max_err_m,"
                  "mismatch_accept_rate,inlier_reject_rate,hypotheses_mean,diverged_runs,"
                  "numeric_faults\n");
-    std::fprintf(tm,
-                 "# sfd-sim thesis-loop: wall-clock time of sfd_assoc_run per frame (includes the "
-                 "EKF camera update), microseconds; not deterministic\n# units: %s\n",
-                 units.c_str());
+    std::fprintf(
+        tm,
+        "# sfd-sim thesis-loop: wall-clock time per frame of the pipeline's association and "
+        "update stages (the EKF camera update included), microseconds; not "
+        "deterministic\n# units: %s\n",
+        units.c_str());
     std::fprintf(tm, "sweep,level_pct,method,runs,frames,time_mean_us,time_median_us\n");
     for (const Sweep &s : sweeps) {
         for (const PointResult &p : s.points) {
@@ -853,8 +955,8 @@ int run_thesis_loop(const ThesisOptions &opt) {
     std::printf("units: %s\n", units_line(ref).c_str());
     std::printf(
         "nominal levels (the two not swept): measurement %g%%, control %g%%, mismatch "
-        "%g%%; RMSE pooled over runs and frames; time = mean wall clock of sfd_assoc_run "
-        "(association + EKF update)\n",
+        "%g%%; RMSE pooled over runs and frames; time = mean wall clock of the pipeline's "
+        "association and update stages (association + EKF update)\n",
         kNominalMeasPct, kNominalCtrlPct, kNominalMismatchPct);
     auto ws = std::make_unique<Workspace>();
     for (Sweep &s : sweeps) {
