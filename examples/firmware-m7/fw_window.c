@@ -21,11 +21,16 @@
 
 /* Everything the core keeps between calls, in one object so that the firmware's budget check
  * (tools/firmware_report.py --state-symbol fw_core_state) can weigh it against SPEC's 256 KiB.
- * The canary build (SFD_FW_CANARY) pads it past that budget: the check must then fail. */
+ * The canary build (SFD_FW_CANARY) pads it 1 KiB past that budget, whatever the pipeline's own
+ * size: the check must then fail. */
+#define FW_STATE_BUDGET_BYTES 262144u
 typedef struct {
     sfd_pipeline_t pipe;
 #ifdef SFD_FW_CANARY
-    uint8_t canary_pad[48 * 1024];
+    uint8_t canary_pad[(sizeof(sfd_pipeline_t) < FW_STATE_BUDGET_BYTES
+                            ? FW_STATE_BUDGET_BYTES - sizeof(sfd_pipeline_t)
+                            : 0u) +
+                       1024u];
 #endif
 } fw_core_state_t;
 
