@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* Output files of the sfd tools: no output may be an input, and no failed run leaves a
- * half-written output (docs/replay.md, "Reading logs and writing outputs").
+ * half-written output (docs/deploy.md, "Reading logs and writing outputs").
  *
  * sfd_same_file(): two paths name one file when both exist and have the same device and inode
  * (a hard link, a symbolic link, ./X and X), or when one does not exist yet and both resolve to

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
 # integration.replay_bad_inputs: sfd-replay on logs that are truncated, corrupt or not LCM logs at
-# all, and with outputs that are inputs or cannot be written (docs/replay.md, "Reading logs and
+# all, and with outputs that are inputs or cannot be written (docs/deploy.md, "Reading logs and
 # writing outputs"). Each case checks the exit code, that the message is one line naming the file
 # (and the byte offset of the bad event), and that a failed run leaves no output and no temporary
 # file behind and changes no input:
