@@ -1,6 +1,5 @@
 /* SPDX-License-Identifier: MIT */
 /* The one bounded reader of LCM log files (sfd_log_reader.h). */
-#define _XOPEN_SOURCE 700
 #include "sfd_log_reader.h"
 
 #include <errno.h>

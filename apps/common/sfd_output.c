@@ -1,6 +1,5 @@
 /* SPDX-License-Identifier: MIT */
 /* Output files: input/output identity and temporary-file-and-rename (sfd_output.h). */
-#define _XOPEN_SOURCE 700
 #include "sfd_output.h"
 
 #include <errno.h>

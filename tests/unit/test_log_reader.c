@@ -10,7 +10,6 @@
  * account for the whole file.
  * `test_log_reader --compare LOG` compares the reader with liblcm on any log (the integration test
  * node_logplayer runs it on a recording of Debian's lcm-logger). */
-#define _XOPEN_SOURCE 700
 #include "sfd_test.h"
 
 #include <lcm/eventlog.h>
@@ -77,7 +76,9 @@ static int setup(void **state) {
         memset(&ev, 0, sizeof ev);
         ev.timestamp = 1000000 + 1000 * k - (k == 4 ? 5000000 : 0);
         ev.channellen = (int32_t)strlen(g_channels[k]);
-        ev.channel = (char *)(uintptr_t)g_channels[k];
+        char channel[64];
+        snprintf(channel, sizeof channel, "%s", g_channels[k]);
+        ev.channel = channel;
         ev.datalen = g_datalen[k];
         ev.data = data + k;
         if (lcm_eventlog_write_event(log, &ev) != 0) return -1;
@@ -96,10 +97,14 @@ static int setup(void **state) {
 
 static int teardown(void **state) {
     (void)state;
-    char cmd[600];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_dir);
+    static const char *const files[] = {"good", "cut", "len", "junk", "flip", "empty", "random"};
+    for (size_t k = 0; k < sizeof files / sizeof files[0]; ++k) {
+        char path[512];
+        snprintf(path, sizeof path, "%s/%s.lcmlog", g_dir, files[k]);
+        unlink(path); /* some may not exist */
+    }
     free(g_good);
-    return system(cmd) == 0 ? 0 : -1;
+    return rmdir(g_dir) == 0 ? 0 : -1;
 }
 
 /* Reads `path` to the end: the number of good events, their total size, the final status. */
