@@ -4,9 +4,10 @@
  * LCM's log format (each event, all integers big-endian):
  *   uint32 sync word 0xEDA1DA01, int64 event number, int64 timestamp (us),
  *   int32 channel length, int32 data length, channel bytes, data bytes.
- * liblcm's lcm_eventlog_read_next_event() trusts both lengths (a data length of 0x7fffffff makes it
- * crash) and silently skips anything that is not a sync word. This reader instead checks every
- * event before it allocates anything:
+ * liblcm's lcm_eventlog_read_next_event() trusts the data length (0x7fffffff makes it crash), and
+ * on a bad event it returns NULL as at the end of the file (Debian's liblcm also drops the good
+ * event before junk), so its caller cannot tell a corrupt log from a short one. This reader
+ * instead checks every event before it allocates anything:
  *   - the sync word must start exactly where the previous event ended (byte 0 for the first);
  *   - the channel length must be 1..SFD_LOG_MAX_CHANNEL, the data length >= 0, and the channel
  *     name must hold no NUL byte;
