@@ -60,7 +60,7 @@ static int setup(void **state) {
     path_of(path, sizeof path, "good.lcmlog");
     lcm_eventlog_t *log = lcm_eventlog_create(path, "w");
     if (log == NULL) return -1;
-    static uint8_t data[70000];
+    static uint8_t data[70000 + NUM_EVENTS]; /* event k writes data + k */
     uint32_t x = 12345u;
     for (size_t i = 0; i < sizeof data; ++i) {
         x = x * 1664525u + 1013904223u;
