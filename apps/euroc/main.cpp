@@ -26,6 +26,7 @@
 #include <cstring>
 #include <dirent.h>
 #include <string>
+#include <utility>
 #include <sys/stat.h>
 #include <vector>
 
@@ -37,6 +38,7 @@
 #include "sfd_truth_t.h"
 #include "euroc_io.hpp"
 #include "lcm_log.hpp"
+#include "sfd_output.h"
 
 namespace {
 
@@ -319,6 +321,31 @@ int main(int argc, char **argv) {
         usage(stderr);
         return 2;
     }
+    // No output may be an input (docs/deploy.md, "Reading logs and writing outputs"): not one of
+    // the files read, and not inside the image folder.
+    {
+        const std::pair<const char *, std::string> ins[] = {{"--frames", frames_csv},
+                                                            {"--imu", imu_csv},
+                                                            {"--calib", calib_yaml},
+                                                            {"--gt", gt_csv}};
+        for (const auto &in : ins) {
+            if (!in.second.empty() && sfd_same_file(out_path.c_str(), in.second.c_str())) {
+                std::fprintf(stderr,
+                             "%s: -o %s is the input %s %s (same file): an output may not "
+                             "overwrite an input\n",
+                             kProg, out_path.c_str(), in.first, in.second.c_str());
+                return 2;
+            }
+        }
+        const size_t slash = out_path.rfind('/');
+        const std::string out_dir =
+            slash == std::string::npos ? "." : out_path.substr(0, slash + 1);
+        if (sfd_same_file(out_dir.c_str(), images.c_str())) {
+            std::fprintf(stderr, "%s: -o %s is inside the input image folder %s\n", kProg,
+                         out_path.c_str(), images.c_str());
+            return 2;
+        }
+    }
 
     sfdapp::EurocCamera calib;
     std::vector<Frame> frames;
@@ -458,10 +485,21 @@ int main(int argc, char **argv) {
         if (a.rank != b.rank) return a.rank < b.rank;
         return a.seq < b.seq;
     });
-    lcm_eventlog_t *log = lcm_eventlog_create(out_path.c_str(), "w");
+    // Written to a temporary file next to OUT and renamed into place when complete.
+    struct Out {
+        sfd_out_t o{};
+        ~Out() { sfd_out_discard(&o); }
+    } out;
+    char oerr[8192];
+    if (sfd_out_begin(&out.o, out_path.c_str(), oerr, sizeof oerr) != 0) {
+        std::fprintf(stderr, "%s: -o %s\n", kProg, oerr);
+        return 1;
+    }
+    lcm_eventlog_t *log = lcm_eventlog_create(out.o.write_path, "w");
     if (log == nullptr) {
-        std::fprintf(stderr, "%s: -o %s: cannot open for writing\n", kProg, out_path.c_str());
-        return 2;
+        std::fprintf(stderr, "%s: -o %s: cannot open for writing (%s)\n", kProg, out_path.c_str(),
+                     std::strerror(errno));
+        return 1;
     }
     bool failed = false;
     for (LogEvent &e : events) {
@@ -474,9 +512,16 @@ int main(int argc, char **argv) {
         ev.data = e.data.data();
         if (lcm_eventlog_write_event(log, &ev) != 0) failed = true;
     }
+    // liblcm's destroy does not report its flush: flush and check here first.
+    if (std::fflush(log->f) != 0 || std::ferror(log->f) != 0) failed = true;
     lcm_eventlog_destroy(log);
     if (failed) {
-        std::fprintf(stderr, "%s: -o %s: write failed\n", kProg, out_path.c_str());
+        std::fprintf(stderr, "%s: -o %s: write failed (%s)\n", kProg, out_path.c_str(),
+                     std::strerror(errno));
+        return 1;
+    }
+    if (sfd_out_commit(&out.o, oerr, sizeof oerr) != 0) {
+        std::fprintf(stderr, "%s: -o %s\n", kProg, oerr);
         return 1;
     }
     std::printf(

@@ -35,6 +35,8 @@
 #include "sfd_feature_frame_t.h"
 #include "sfd_feature_verdict_t.h"
 #include "sfd_hil_paths.h"  // SFD_HIL_PYTHON, SFD_HIL_PLOT_SCRIPT (generated)
+#include "sfd_log_reader.h"
+#include "sfd_output.h"
 #include "sfd_timing_t.h"
 
 namespace {
@@ -66,9 +68,6 @@ void put_be64(uint8_t *p, int64_t x) {
         p[k] = static_cast<uint8_t>(v & 0xFF);
         v >>= 8;
     }
-}
-uint32_t get_be32(const uint8_t *p) {
-    return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | p[3];
 }
 
 // What --budget-of applies the deadline to, as the report names it (Options::BudgetOf order).
@@ -272,46 +271,24 @@ class Publisher : public sfdsim::FlightSink {
     long published_ = 0, malformed_ = 0, publish_failures_ = 0;
 };
 
-// Reads an LCM log (LCM's event log format) with bounds checks on every field, so that no input
-// file can crash the tool; events go to the sink in file order. Returns 0, or 2 with a reason.
-int play_log(const std::string &path, sfdsim::FlightSink &sink, long *events, std::string *err) {
-    FILE *f = std::fopen(path.c_str(), "rb");
-    if (f == nullptr) {
-        *err = path + ": cannot open";
-        return 2;
-    }
-    std::vector<uint8_t> data;
-    std::string channel;
-    uint8_t hdr[28];
+// Plays an LCM log through the one bounded reader of the tools (sfd_log_reader.h: lengths checked
+// against the file size, so that no input file can crash the tool); events go to the sink in file
+// order. Returns 0, or 2 with the reader's one-line reason (the file and the bad event's offset).
+// With `sink` null it only checks the whole log (before anything is published).
+int play_log(const std::string &path, sfdsim::FlightSink *sink, long *events, std::string *err) {
+    static sfd_log_reader_t r;  // ~3 KiB of buffers: static
+    sfd_log_event_t ev;
+    sfd_log_status_t st = sfd_log_open(&r, path.c_str(), 0);
     *events = 0;
-    int rc = 0;
-    for (;;) {
-        const size_t got = std::fread(hdr, 1, sizeof hdr, f);
-        if (got == 0) break;
-        if (got != sizeof hdr || get_be32(hdr) != 0xEDA1DA01u) {
-            *err = path + ": event " + std::to_string(*events) + ": not an LCM log event";
-            rc = 2;
-            break;
-        }
-        const int64_t ts = get_be64(hdr + 12);
-        const uint32_t chlen = get_be32(hdr + 20), dlen = get_be32(hdr + 24);
-        if (chlen == 0 || chlen > 256 || dlen > 16u * 1024u * 1024u) {
-            *err = path + ": event " + std::to_string(*events) + ": bad channel or data length";
-            rc = 2;
-            break;
-        }
-        channel.resize(chlen);
-        data.resize(dlen);
-        if (std::fread(&channel[0], 1, chlen, f) != chlen ||
-            (dlen > 0 && std::fread(data.data(), 1, dlen, f) != dlen)) {
-            *err = path + ": event " + std::to_string(*events) + ": truncated";
-            rc = 2;
-            break;
-        }
+    while (st == SFD_LOG_OK && (st = sfd_log_next(&r, &ev)) == SFD_LOG_OK) {
         ++*events;
-        if (!sink.message(channel.c_str(), ts, data.data(), static_cast<int>(dlen))) break;
+        if (sink != nullptr && !sink->message(ev.channel, ev.timestamp, ev.data, ev.datalen)) {
+            st = SFD_LOG_END;
+        }
     }
-    std::fclose(f);
+    const int rc = st == SFD_LOG_END ? 0 : 2;
+    if (rc != 0) *err = r.message;
+    sfd_log_close(&r);
     return rc;
 }
 
@@ -493,25 +470,56 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (!lcm_url.empty()) cfg.lcm_url = lcm_url;
-    if (!opt.log_path.empty()) {
-        FILE *f = std::fopen(opt.log_path.c_str(), "rb");
-        if (f == nullptr) {
-            std::fprintf(stderr, "sfd-hil: --log: cannot open %s\n", opt.log_path.c_str());
-            return 2;
+    // No output (--csv, --png) may be an input (--log, --config) or the other output.
+    const std::pair<const char *, std::string> ins[2] = {{"--log", opt.log_path},
+                                                         {"--config", config_path}};
+    const std::pair<const char *, std::string> outs[2] = {{"--csv", opt.csv}, {"--png", opt.png}};
+    for (const auto &o : outs) {
+        for (const auto &in : ins) {
+            if (o.second.empty() || in.second.empty()) continue;
+            if (sfd_same_file(o.second.c_str(), in.second.c_str())) {
+                std::fprintf(stderr,
+                             "sfd-hil: %s %s is the input %s %s (same file): an output may not "
+                             "overwrite an input\n",
+                             o.first, o.second.c_str(), in.first, in.second.c_str());
+                return 2;
+            }
         }
-        std::fclose(f);
     }
-    FILE *csv = nullptr;
-    if (!opt.csv.empty()) {
-        csv = std::fopen(opt.csv.c_str(), "w");
-        if (csv == nullptr) {
-            std::fprintf(stderr, "sfd-hil: --csv: cannot write %s\n", opt.csv.c_str());
-            return 2;
-        }
+    if (!opt.csv.empty() && !opt.png.empty() && sfd_same_file(opt.csv.c_str(), opt.png.c_str())) {
+        std::fprintf(stderr, "sfd-hil: --csv %s and --png %s are the same file\n", opt.csv.c_str(),
+                     opt.png.c_str());
+        return 2;
     }
     if (!opt.png.empty() && opt.csv.empty()) {
         std::fprintf(stderr, "sfd-hil: --png needs --csv (the plot reads the CSV)\n");
         return 2;
+    }
+    if (!opt.log_path.empty()) {  // the whole log is checked before anything is published
+        long checked = 0;
+        if (play_log(opt.log_path, nullptr, &checked, &err) != 0) {
+            std::fprintf(stderr, "sfd-hil: --log: %s\n", err.c_str());
+            return 2;
+        }
+    }
+    // --csv: written to a temporary file next to it, renamed into place when complete.
+    struct CsvOut {
+        sfd_out_t out{};
+        ~CsvOut() { sfd_out_discard(&out); }
+    } csv_out;
+    FILE *csv = nullptr;
+    if (!opt.csv.empty()) {
+        char oerr[8192];
+        if (sfd_out_begin(&csv_out.out, opt.csv.c_str(), oerr, sizeof oerr) != 0) {
+            std::fprintf(stderr, "sfd-hil: --csv %s\n", oerr);
+            return 1;
+        }
+        csv = std::fopen(csv_out.out.write_path, "w");
+        if (csv == nullptr) {
+            std::fprintf(stderr, "sfd-hil: --csv %s: cannot open for writing (%s)\n",
+                         opt.csv.c_str(), std::strerror(errno));
+            return 1;
+        }
     }
     lcm_t *tx = lcm_create(cfg.lcm_url.c_str());
     lcm_t *rx = tx != nullptr ? lcm_create(cfg.lcm_url.c_str()) : nullptr;
@@ -572,7 +580,7 @@ int main(int argc, char **argv) {
         fo.random_fraction = opt.random_fraction;
         if (sfdsim::generate_flight(fo, pub, &fst) != 0) input_rc = 1;
     } else {
-        input_rc = play_log(opt.log_path, pub, &events, &err);
+        input_rc = play_log(opt.log_path, &pub, &events, &err);
         if (input_rc != 0) std::fprintf(stderr, "sfd-hil: --log: %s\n", err.c_str());
     }
     // Outstanding verdicts and timings: until every frame has both, or the last publish is
@@ -757,8 +765,14 @@ int main(int argc, char **argv) {
                 std::fprintf(csv, "\n");
             }
         }
-        if (std::fclose(csv) != 0) {
-            std::fprintf(stderr, "sfd-hil: --csv: writing %s failed\n", opt.csv.c_str());
+        char oerr[8192];
+        if (sfd_close_checked(csv) != 0) {
+            std::fprintf(stderr, "sfd-hil: --csv %s: write failed (%s)\n", opt.csv.c_str(),
+                         std::strerror(errno));
+            return 1;
+        }
+        if (sfd_out_commit(&csv_out.out, oerr, sizeof oerr) != 0) {
+            std::fprintf(stderr, "sfd-hil: --csv %s\n", oerr);
             return 1;
         }
         if (!opt.png.empty() && run_plot(opt.csv, opt.png) != 0 && rc == 0) rc = 1;

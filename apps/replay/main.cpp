@@ -5,8 +5,10 @@
 // byte-identical OUT and summary: wall-clock timing goes only to a separate file
 // (SUMMARY.timing.json) and never into OUT (the node publishes SFD_TIMING with durations 0 here).
 #include <lcm/eventlog.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -23,7 +25,9 @@
 #include "sfd_app_config.hpp"
 #include "sfd_eval.hpp"
 #include "sfd_lcm_codec.h"
+#include "sfd_log_reader.h"
 #include "sfd_node_core.h"
+#include "sfd_output.h"
 
 namespace {
 
@@ -163,19 +167,61 @@ json trajectory_json(const sfdeval::TrajectoryErrors &e) {
                                        {"in_band_95", number(e.nees_in_band_95)}}}};
 }
 
-// Writes `text` to `path` (exit code 0, or 1 with a message naming the path on any failure).
-int write_text(const std::string &path, const std::string &text, const char *what) {
-    std::FILE *f = std::fopen(path.c_str(), "w");
+// The output files of a run (-o, --summary, SUMMARY.timing.json): each is written to a temporary
+// file next to it and renamed into place only when the whole run succeeded (sfd_output.h).
+struct Outputs {
+    sfd_out_t log, summary, timing;
+    ~Outputs() {
+        sfd_out_discard(&log);
+        sfd_out_discard(&summary);
+        sfd_out_discard(&timing);
+    }
+};
+
+// Writes `text` to the output `o` (exit code 0, or 1 with a message naming the path on any
+// failure: the open, a short write, the flush or the close).
+int write_text(const sfd_out_t &o, const std::string &text, const char *what) {
+    std::FILE *f = std::fopen(o.write_path, "w");
     if (f == nullptr) {
-        std::fprintf(stderr, "sfd-replay: %s %s: cannot open for writing\n", what, path.c_str());
+        std::fprintf(stderr, "sfd-replay: %s %s: cannot open for writing (%s)\n", what, o.path,
+                     std::strerror(errno));
         return 1;
     }
     const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-    if (std::fclose(f) != 0 || !ok) {
-        std::fprintf(stderr, "sfd-replay: %s %s: write failed\n", what, path.c_str());
+    if (sfd_close_checked(f) != 0 || !ok) {
+        std::fprintf(stderr, "sfd-replay: %s %s: write failed (%s)\n", what, o.path,
+                     std::strerror(errno));
         return 1;
     }
     return 0;
+}
+
+// Exit 2 when an output is an input or another output (same path or same file).
+bool outputs_distinct(const std::vector<std::pair<const char *, std::string>> &inputs,
+                      const std::vector<std::pair<const char *, std::string>> &outputs) {
+    for (size_t i = 0; i < outputs.size(); ++i) {
+        for (const auto &in : inputs) {
+            if (sfd_same_file(outputs[i].second.c_str(), in.second.c_str())) {
+                std::fprintf(stderr,
+                             "sfd-replay: %s %s is the input %s %s (same file): an output may "
+                             "not overwrite an input\n",
+                             outputs[i].first, outputs[i].second.c_str(), in.first,
+                             in.second.c_str());
+                return false;
+            }
+        }
+        struct stat st;  // two outputs to /dev/null (a character device) are fine
+        const bool device = stat(outputs[i].second.c_str(), &st) == 0 && S_ISCHR(st.st_mode);
+        for (size_t j = 0; j < i && !device; ++j) {
+            if (sfd_same_file(outputs[i].second.c_str(), outputs[j].second.c_str())) {
+                std::fprintf(stderr, "sfd-replay: %s %s and %s %s are the same file\n",
+                             outputs[j].first, outputs[j].second.c_str(), outputs[i].first,
+                             outputs[i].second.c_str());
+                return false;
+            }
+        }
+    }
+    return true;
 }
 
 void usage(FILE *f) {
@@ -183,9 +229,18 @@ void usage(FILE *f) {
         f,
         "usage: sfd-replay IN.lcmlog [--config F] [-o OUT.lcmlog] [--summary S.json] [--method M]\n"
         "                  [--alpha A] [--window L] [--group n] [--pixel-sigma PX]\n"
-        "                  [--depth-default M] [--no-isolation]\n"
-        "       sfd-replay IN.lcmlog --score-only [--config F] [--summary S.json]\n"
+        "                  [--depth-default M] [--no-isolation] [--salvage]\n"
+        "       sfd-replay IN.lcmlog --score-only [--config F] [--summary S.json] [--salvage]\n"
         "  Plays IN through the node's code path as fast as possible.\n"
+        "  IN must be an LCM log: the first bad event (no sync word where an event\n"
+        "  starts, a channel length outside 1..999 or a negative data length, an event\n"
+        "  running past the end of the file) is exit 2 naming IN and its byte offset;\n"
+        "  an empty file, a directory or anything else that is not a regular file is\n"
+        "  exit 2 too.\n"
+        "  --salvage   skip bad events instead (resynchronizing on the next sync word\n"
+        "              that starts a good event); the summary counts them (\"log\":\n"
+        "              bad_events, bytes_skipped); a file with no good event is still\n"
+        "              exit 2\n"
         "  --score-only  run no node: score the SFD_VERDICT and SFD_STATE already in IN\n"
         "              (a recorded sfd-node run, or a previous -o) against its TRUTH\n"
         "  -o          write the input events and the published SFD_VERDICT/SFD_STATE/\n"
@@ -198,7 +253,15 @@ void usage(FILE *f) {
         "  spurious one is a miss) and the SFD_STATE poses (ATE after position+yaw\n"
         "  alignment, raw RMSE, drift, RPE, NEES; docs/evaluation.md). With\n"
         "  filter.init_from_truth: 1 the filter starts from TRUTH instead of at rest.\n"
-        "Exit: 0 ok, 2 bad usage or unreadable input, 1 internal failure.\n");
+        "Outputs: an output (-o, --summary, S.timing.json) that is an input (IN,\n"
+        "  --config) or another output (a character device such as /dev/null aside),\n"
+        "  by path or by file (hard or symbolic link), is exit 2 before anything is\n"
+        "  written. Outputs are written to a temporary file in their directory and\n"
+        "  renamed into place when the run succeeds (special files such as /dev/null\n"
+        "  are written directly); a failed write is exit 1 naming the path, and a\n"
+        "  failed run leaves no output behind (an older one stays as it was).\n"
+        "Exit: 0 ok, 2 bad usage or bad input (a one-line reason naming the file),\n"
+        "  1 internal failure or a failed write.\n");
 }
 
 double parse_double(const char *flag, const char *s, double lo, double hi, bool *ok) {
@@ -213,7 +276,8 @@ double parse_double(const char *flag, const char *s, double lo, double hi, bool 
 
 int run(int argc, char **argv) {
     const char *in_path = nullptr, *out_path = nullptr, *summary_path = nullptr;
-    bool score_only = false;
+    bool score_only = false, salvage = false;
+    std::vector<std::pair<const char *, std::string>> inputs;
     sfdapp::AppConfig app_cfg;
     std::string err;
     for (int i = 1; i + 1 < argc; ++i) {  // the config file first, flags override it
@@ -232,7 +296,7 @@ int run(int argc, char **argv) {
             usage(stdout);
             return 0;
         } else if (!std::strcmp(a, "--config") && has) {
-            ++i;
+            inputs.emplace_back("--config", argv[++i]);
         } else if (!std::strcmp(a, "-o") && has) {
             out_path = argv[++i];
         } else if (!std::strcmp(a, "--summary") && has) {
@@ -254,6 +318,8 @@ int run(int argc, char **argv) {
             cfg.params.default_depth_m = parse_double(a, argv[++i], 1e-3, 1e6, &ok);
         } else if (!std::strcmp(a, "--score-only")) {
             score_only = true;
+        } else if (!std::strcmp(a, "--salvage")) {
+            salvage = true;
         } else if (!std::strcmp(a, "--no-isolation")) {
             cfg.params.parity_isolation = 0;
         } else if (a[0] != '-' && in_path == nullptr) {
@@ -282,26 +348,49 @@ int run(int argc, char **argv) {
         std::fprintf(stderr, "sfd-replay: --score-only writes no OUT (-o)\n");
         return 2;
     }
-    lcm_eventlog_t *in = lcm_eventlog_create(in_path, "r");
-    if (in == nullptr) {
-        std::fprintf(stderr, "sfd-replay: %s: cannot open for reading\n", in_path);
+    // No output may be an input or another output: checked before anything is opened.
+    inputs.emplace(inputs.begin(), "log", in_path);
+    std::vector<std::pair<const char *, std::string>> outputs;
+    if (out_path != nullptr) outputs.emplace_back("-o", out_path);
+    if (summary_path != nullptr) {
+        outputs.emplace_back("--summary", summary_path);
+        outputs.emplace_back("--summary timing", std::string(summary_path) + ".timing.json");
+    }
+    if (!outputs_distinct(inputs, outputs)) return 2;
+    static sfd_log_reader_t in;  // ~3 KiB of buffers: static
+    struct ReaderCloser {
+        ~ReaderCloser() { sfd_log_close(&in); }
+    } close_in;
+    if (sfd_log_open(&in, in_path, salvage ? 1 : 0) != SFD_LOG_OK) {
+        std::fprintf(stderr, "sfd-replay: %s\n", in.message);
         return 2;
     }
+    Outputs outs;
+    char oerr[8192];
+    const auto begin = [&oerr](sfd_out_t *o, const char *flag, const std::string &path) {
+        if (sfd_out_begin(o, path.c_str(), oerr, sizeof oerr) == 0) return true;
+        std::fprintf(stderr, "sfd-replay: %s %s\n", flag, oerr);
+        return false;
+    };
+    if ((out_path != nullptr && !begin(&outs.log, "-o", out_path)) ||
+        (summary_path != nullptr &&
+         (!begin(&outs.summary, "--summary", summary_path) ||
+          !begin(&outs.timing, "--summary", std::string(summary_path) + ".timing.json")))) {
+        return 1;
+    }
     if (out_path != nullptr) {
-        g_app.out = lcm_eventlog_create(out_path, "w");
+        g_app.out = lcm_eventlog_create(outs.log.write_path, "w");
         if (g_app.out == nullptr) {
-            std::fprintf(stderr, "sfd-replay: -o %s: cannot open for writing\n", out_path);
-            lcm_eventlog_destroy(in);
-            return 2;
+            std::fprintf(stderr, "sfd-replay: -o %s: cannot open for writing (%s)\n", out_path,
+                         std::strerror(errno));
+            return 1;
         }
     }
     if (sfd_node_init(&g_node, &cfg, on_publish, nullptr, &g_app) != SFD_OK) {
         std::fprintf(stderr, "sfd-replay: invalid detector parameters\n");
+        if (g_app.out != nullptr) lcm_eventlog_destroy(g_app.out);
         return 2;
     }
-    std::fseek(in->f, 0, SEEK_END);
-    const long file_size = std::ftell(in->f);
-    std::fseek(in->f, 0, SEEK_SET);
     const bool progress = isatty(STDERR_FILENO) != 0;
     std::map<int64_t, TruthRecord> truth;  // TRUTH by frame time
     static sfd_truth_t tr;
@@ -311,8 +400,10 @@ int run(int argc, char **argv) {
     int64_t first_ts = 0, last_ts = 0, events = 0, foreign = 0;
     int last_pct = -1;
     const auto wall0 = std::chrono::steady_clock::now();
-    for (lcm_eventlog_event_t *ev = lcm_eventlog_read_next_event(in); ev != nullptr;
-         ev = lcm_eventlog_read_next_event(in)) {
+    sfd_log_event_t event;
+    sfd_log_status_t read_status;
+    while ((read_status = sfd_log_next(&in, &event)) == SFD_LOG_OK) {
+        const sfd_log_event_t *ev = &event;
         if (events == 0) first_ts = ev->timestamp;
         last_ts = ev->timestamp;
         ++events;
@@ -350,23 +441,39 @@ int run(int argc, char **argv) {
         } else {
             ++foreign;  // other channels (e.g. a previous run's outputs) are copied, not read
         }
-        lcm_eventlog_free_event(ev);
-        if (progress && file_size > 0) {
-            const int pct = int(100.0 * double(std::ftell(in->f)) / double(file_size));
+        if (progress && in.size > 0) {
+            const int pct = int(100.0 * double(in.offset) / double(in.size));
             if (pct != last_pct) {
                 std::fprintf(stderr, "\rsfd-replay: %3d%%", pct);
                 last_pct = pct;
             }
         }
     }
+    if (progress) std::fprintf(stderr, read_status == SFD_LOG_END ? "\rsfd-replay: 100%%\n" : "\n");
+    if (read_status != SFD_LOG_END) {  // a bad event (strict), or no good event at all: no output
+        std::fprintf(stderr, "sfd-replay: %s\n", in.message);
+        if (g_app.out != nullptr) lcm_eventlog_destroy(g_app.out);
+        return read_status == SFD_LOG_IO_ERROR || read_status == SFD_LOG_NO_MEMORY ? 1 : 2;
+    }
+    if (in.bad_events > 0) {
+        std::fprintf(stderr, "sfd-replay: %s: --salvage: skipped %lld bad events (%lld bytes)\n",
+                     in_path, static_cast<long long>(in.bad_events),
+                     static_cast<long long>(in.bytes_skipped));
+    }
     if (!score_only) sfd_node_flush(&g_node);
     const double wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-    if (progress) std::fprintf(stderr, "\rsfd-replay: 100%%\n");
-    lcm_eventlog_destroy(in);
-    if (g_app.out != nullptr) lcm_eventlog_destroy(g_app.out);
+    if (g_app.out != nullptr) {
+        // liblcm's destroy does not report its flush: flush and check here first.
+        if (std::fflush(g_app.out->f) != 0 || std::ferror(g_app.out->f) != 0) {
+            g_app.write_failed = true;
+        }
+        lcm_eventlog_destroy(g_app.out);
+        g_app.out = nullptr;
+    }
     if (g_app.write_failed) {
-        std::fprintf(stderr, "sfd-replay: -o %s: write failed\n", out_path);
+        std::fprintf(stderr, "sfd-replay: -o %s: write failed (%s)\n", out_path,
+                     std::strerror(errno));
         return 1;
     }
 
@@ -473,6 +580,9 @@ int run(int argc, char **argv) {
         j["input"] = in_path;
         j["method"] = score_only ? std::string("recorded") : method_name;
         j["events"] = static_cast<long long>(events);
+        j["log"] = json{{"salvage", salvage},
+                        {"bad_events", static_cast<long long>(in.bad_events)},
+                        {"bytes_skipped", static_cast<long long>(in.bytes_skipped)}};
         j["filter_start"] = filter_start;
         j["frames"] = json{{"in", static_cast<long long>(c.frames_in)},
                            {"processed", static_cast<long long>(c.frames_processed)},
@@ -483,7 +593,7 @@ int run(int argc, char **argv) {
             json{{"frames", static_cast<long long>(truth.size())}, {"undecodable", truth_bad}};
         j["detection"] = counts.labelled() > 0 ? detection_json(counts) : json(nullptr);
         j["trajectory"] = te.frames > 0 ? trajectory_json(te) : json(nullptr);
-        if (const int rc = write_text(summary_path,
+        if (const int rc = write_text(outs.summary,
                                       j.dump(2, ' ', false, json::error_handler_t::replace) + "\n",
                                       "--summary"))
             return rc;
@@ -492,8 +602,14 @@ int run(int argc, char **argv) {
                {"wall_s", wall_s},
                {"log_s", log_s},
                {"speed_vs_real_time", speed}};
-        const std::string tpath = std::string(summary_path) + ".timing.json";
-        if (const int rc = write_text(tpath, t.dump(2) + "\n", "--summary")) return rc;
+        if (const int rc = write_text(outs.timing, t.dump(2) + "\n", "--summary")) return rc;
+    }
+    // Every output complete: renamed into place together.
+    for (sfd_out_t *o : {&outs.log, &outs.summary, &outs.timing}) {
+        if (o->active && sfd_out_commit(o, oerr, sizeof oerr) != 0) {
+            std::fprintf(stderr, "sfd-replay: %s\n", oerr);
+            return 1;
+        }
     }
     return 0;
 }

@@ -43,6 +43,7 @@
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "euroc_io.hpp"
@@ -168,6 +169,28 @@ int write_semireal_log(const SemirealOptions &opt) {
     const std::string imu_path = mav + "/imu0/data.csv";
     const std::string gt_path = mav + "/state_groundtruth_estimate0/data.csv";
     const std::string cam_path = mav + "/cam0/sensor.yaml";
+    // No output (-o, --config-out) may be an input or the other output (docs/deploy.md).
+    {
+        const std::pair<const char *, std::string> outs[2] = {{"-o", opt.out_path},
+                                                              {"--config-out", opt.config_out}};
+        const std::string ins[3] = {imu_path, gt_path, cam_path};
+        for (const auto &o : outs) {
+            for (const std::string &in : ins) {
+                if (o.second.empty() || !sfd_same_file(o.second.c_str(), in.c_str())) continue;
+                std::fprintf(stderr,
+                             "sfd-sim: %s %s is the input %s (same file): an output may not "
+                             "overwrite an input\n",
+                             o.first, o.second.c_str(), in.c_str());
+                return 2;
+            }
+        }
+        if (!opt.config_out.empty() &&
+            sfd_same_file(opt.out_path.c_str(), opt.config_out.c_str())) {
+            std::fprintf(stderr, "sfd-sim: -o %s and --config-out %s are the same file\n",
+                         opt.out_path.c_str(), opt.config_out.c_str());
+            return 2;
+        }
+    }
     std::vector<ImuRow> imu;
     std::vector<GtRow> gt;
     sfdapp::EurocCamera calib;
@@ -219,8 +242,8 @@ int write_semireal_log(const SemirealOptions &opt) {
 
     LogWriter log(opt.out_path);
     if (!log.ok()) {
-        std::fprintf(stderr, "sfd-sim: -o: cannot write %s\n", opt.out_path.c_str());
-        return 2;
+        std::fprintf(stderr, "sfd-sim: -o %s\n", log.error().c_str());
+        return 1;
     }
     sfd_prng_t rng;
     sfd_prng_seed(&rng, opt.seed);
@@ -425,8 +448,8 @@ int write_semireal_log(const SemirealOptions &opt) {
         log.write("TRUTH", utime, buf, sfd_truth_t_encode(buf.data(), 0, int(buf.size()), &tr));
     }
     write_imu_until(t_end);
-    if (!log.ok()) {
-        std::fprintf(stderr, "sfd-sim: writing %s failed\n", opt.out_path.c_str());
+    if (!log.finish()) {
+        std::fprintf(stderr, "sfd-sim: -o %s\n", log.error().c_str());
         return 1;
     }
     const GtRow &g0 = gt[g_first];

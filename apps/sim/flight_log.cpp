@@ -666,6 +666,8 @@ class LogSink : public FlightSink {
   public:
     explicit LogSink(const std::string &path) : log_(path) {}
     bool ok() const { return log_.ok(); }
+    bool finish() { return log_.finish(); }
+    const std::string &error() const { return log_.error(); }
     bool message(const char *channel, int64_t utime, const uint8_t *data, int size) override {
         log_.write(channel, utime, data, size);
         return true;
@@ -684,13 +686,15 @@ int write_flight_log(const FlightOptions &opt) {
     }
     LogSink log(opt.out_path);
     if (!log.ok()) {
-        std::fprintf(stderr, "sfd-sim: -o: cannot write %s\n", opt.out_path.c_str());
-        return 2;
+        std::fprintf(stderr, "sfd-sim: -o %s\n", log.error().c_str());
+        return 1;
     }
     FlightStats st;
     const int rc = generate_flight(opt, log, &st);
-    if (rc != 0 || !log.ok()) {
-        std::fprintf(stderr, "sfd-sim: writing %s failed\n", opt.out_path.c_str());
+    if (rc != 0 || !log.finish()) {
+        std::fprintf(stderr, "sfd-sim: -o %s\n",
+                     rc != 0 ? (opt.out_path + ": a message could not be encoded").c_str()
+                             : log.error().c_str());
         return 1;
     }
     const double n = double(st.features ? st.features : 1);

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* sfd-fuzz-seeds LOG.lcmlog OUTDIR: the seed corpus of the fuzz targets, from an sfd-sim log read
- * with LCM's own lcm_eventlog API:
+ * with the tools' one bounded LCM log reader (apps/common/sfd_log_reader.h; a corrupt log is exit
+ * 2 naming the file and the bad event's offset):
  *   OUTDIR/imu, camera_info, features: each event's payload on that channel, one file each;
  *   OUTDIR/sequence: the whole log in fuzz_sequence.c's format (wire FEATURES; compact FEATURES;
  *                    under a few configuration bytes; after an IMU burst that overflows the
@@ -13,9 +14,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include <lcm/eventlog.h>
-
 #include "fuzz_harness.h"
+#include "sfd_log_reader.h"
 
 enum { MAX_EVENTS = 4096, SEQ_CAP = 4 * 1024 * 1024 };
 
@@ -142,9 +142,10 @@ int main(int argc, char **argv) {
         return argc == 2 ? 0 : 2;
     }
     const char *dir = argv[2];
-    lcm_eventlog_t *log = lcm_eventlog_create(argv[1], "r");
-    if (log == NULL) {
-        fprintf(stderr, "sfd-fuzz-seeds: cannot read %s\n", argv[1]);
+    static sfd_log_reader_t log;
+    if (sfd_log_open(&log, argv[1], 0) != SFD_LOG_OK) {
+        fprintf(stderr, "sfd-fuzz-seeds: %s\n", log.message);
+        sfd_log_close(&log);
         return 2;
     }
     static const char *const subs[3] = {"imu", "camera_info", "features"};
@@ -153,8 +154,10 @@ int main(int argc, char **argv) {
     make_dir(dir, "sequence");
     int per_kind[3] = {0, 0, 0};
     const event_t *first[3] = {NULL, NULL, NULL};
-    for (lcm_eventlog_event_t *ev = lcm_eventlog_read_next_event(log); ev != NULL;
-         ev = lcm_eventlog_read_next_event(log)) {
+    sfd_log_event_t event;
+    sfd_log_status_t st;
+    while ((st = sfd_log_next(&log, &event)) == SFD_LOG_OK) {
+        const sfd_log_event_t *ev = &event;
         int kind = -1;
         if (!strcmp(ev->channel, "IMU")) kind = FZ_SEQ_IMU;
         if (!strcmp(ev->channel, "CAMERA_INFO")) kind = FZ_SEQ_CAMERA_INFO;
@@ -171,9 +174,12 @@ int main(int argc, char **argv) {
             write_file(dir, subs[kind], name, e->data, (size_t)e->size);
             if (first[kind] == NULL) first[kind] = e;
         }
-        lcm_eventlog_free_event(ev);
     }
-    lcm_eventlog_destroy(log);
+    sfd_log_close(&log);
+    if (st != SFD_LOG_END) {
+        fprintf(stderr, "sfd-fuzz-seeds: %s\n", log.message);
+        return 2;
+    }
     if (per_kind[FZ_SEQ_IMU] == 0 || per_kind[FZ_SEQ_CAMERA_INFO] == 0 ||
         per_kind[FZ_SEQ_FEATURES] == 0) {
         fprintf(stderr, "sfd-fuzz-seeds: %s lacks IMU, CAMERA_INFO or FEATURES events\n", argv[1]);

@@ -10,7 +10,9 @@
 #  - the conversion is byte-identical when repeated, and the same through --euroc (standard
 #    layout, made of symbolic links to the same files);
 #  - every method processes the 10 frames, judges features, and the summary says "not scored"
-#    (null scores) instead of scoring against labels real data does not have.
+#    (null scores) instead of scoring against labels real data does not have;
+#  - -o naming an input (the --imu file, through ./) is exit 2 and leaves it unchanged; -o
+#    /dev/full is exit 1 naming the path (docs/deploy.md, "Reading logs and writing outputs").
 # Skips (CTest SKIP_RETURN_CODE 77) with a message when the shared data is absent.
 # usage: euroc_replay.sh BUILD_DIR PYTHON PYTHONPATH_FOR_TYPES DATA_DIR
 set -euo pipefail
@@ -113,3 +115,16 @@ for log in ["fb", "nofb"]:
     print(f"{log}: {dict(c)}; CAMERA_INFO equals cam0_sensor.yaml")
 print("euroc replay: conversion, counts, calibration and every method checked")
 PYEOF
+
+# No output may be an input; write failures are exit 1 naming the path.
+cp "$data/derived/imu0/data.csv" "$tmp/imu.csv"
+chmod u+w "$tmp/imu.csv"
+rc=0; "$build/apps/sfd-euroc" "${common[@]}" --imu "$tmp/imu.csv" -o "$tmp/./imu.csv" \
+  > /dev/null 2> "$tmp/err.txt" || rc=$?
+cmp -s "$tmp/imu.csv" "$data/derived/imu0/data.csv" && [ "$rc" -eq 2 ] &&
+  grep -q "is the input --imu" "$tmp/err.txt" || {
+  cat "$tmp/err.txt"; echo "sfd-euroc -o = --imu: exit $rc"; exit 1; }
+rc=0; "$build/apps/sfd-euroc" "${common[@]}" -o /dev/full > /dev/null 2> "$tmp/err.txt" || rc=$?
+[ "$rc" -eq 1 ] && grep -q "^sfd-euroc: -o /dev/full: write failed" "$tmp/err.txt" || {
+  cat "$tmp/err.txt"; echo "sfd-euroc -o /dev/full: exit $rc"; exit 1; }
+echo "sfd-euroc: -o = --imu refused (exit 2), -o /dev/full exit 1"

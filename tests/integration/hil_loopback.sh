@@ -136,13 +136,13 @@ cat "$SFD_TMP/nonode.txt"
 [ "$(field 'lost: frames without verdict' "$SFD_TMP/nonode.txt")" = "20" ] || {
   echo "no node: expected 20 lost frames"; exit 1; }
 
-# A file that is not an LCM log: exit 2 with the reason, no crash.
+# A file that is not an LCM log: exit 2 with the reason and the byte offset, no crash.
 rc=0
 "$hil" --log "$SFD_TMP/garbage.lcmlog" --rate 0 --timeout-ms 50 --lcm-url "$url" \
   > "$SFD_TMP/garbage.txt" 2>&1 || rc=$?
-[ "$rc" -eq 2 ] && grep -q "not an LCM log event" "$SFD_TMP/garbage.txt" || {
+[ "$rc" -eq 2 ] && grep -q "garbage.lcmlog: no sync word at byte 0" "$SFD_TMP/garbage.txt" || {
   cat "$SFD_TMP/garbage.txt"; echo "garbage log: exit $rc, expected 2 with a reason"; exit 1; }
-echo "ok: garbage log -> exit 2: $(grep -m1 'not an LCM' "$SFD_TMP/garbage.txt")"
+echo "ok: garbage log -> exit 2: $(grep -m1 'no sync word' "$SFD_TMP/garbage.txt")"
 
 # 6. real-time set-up: every thread of the node (main and LCM's receive thread) SCHED_FIFO 7,
 # pinned to CPU 0, memory locked; then a clean closed-loop run against it.

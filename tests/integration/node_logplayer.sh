@@ -4,7 +4,8 @@
 # (ttl=0) into a running sfd-node while Debian's lcm-logger records the bus. Then:
 #  - the node stops cleanly on SIGINT (exit 0);
 #  - the recording holds one SFD_VERDICT and one SFD_TIMING per FEATURES frame;
-#  - a log recorded by lcm-logger replays in sfd-replay;
+#  - a log recorded by lcm-logger replays in sfd-replay, and sfd's log reader reads it exactly as
+#    liblcm's reader does;
 #  - every verdict is identical to the one sfd-replay computes from the same log (the node and the
 #    replay share one code path), read back through LCM's Python EventLog.
 # Everything runs inside a private network namespace (unshare -n) whose only interface is
@@ -81,6 +82,10 @@ for utime in rep:
     spurious += sum(1 for s in rep[utime][1] if s == 2)
 print('node verdicts identical to sfd-replay for all 60 frames (%d SPURIOUS)' % spurious)
 PYEOF
+
+# sfd's one log reader (apps/common/sfd_log_reader.h) reads the recording of Debian's lcm-logger
+# exactly as liblcm's reader does: every event, field by field.
+"$build/tests/test_log_reader" --compare "$tmp/recorded.lcmlog" | grep -v '^\['
 
 # A log recorded by lcm-logger replays in sfd-replay (the recording also holds the node's own
 # outputs and LCM_SELF_TEST: they are copied, not interpreted).

@@ -8,7 +8,8 @@
 #  - malformed inputs exit with 2 and a one-line reason naming the file and line (or field):
 #    a non-numeric field, a wrong field count, a timestamp going backwards, a non-unit
 #    quaternion, a ground-truth gap over 0.2 s, a missing sensor.yaml key, a missing folder;
-#    bad options exit with 2; sfd-replay refuses a malformed filter.init_accel_bias_m_s2.
+#    bad options exit with 2; sfd-replay refuses a malformed filter.init_accel_bias_m_s2;
+#  - -o or --config-out naming an input file is exit 2 and leaves it unchanged.
 # usage: semireal_inputs.sh BUILD_DIR PYTHON PYTHONPATH_FOR_TYPES
 set -euo pipefail
 build="$1"; py="$2"; pytypes="$3"
@@ -140,4 +141,12 @@ expect_fail "missing folder" "nowhere/imu0/data.csv: cannot open" \
 expect_fail "no --euroc" "needs --euroc DIR and -o" euroc-semireal -o "$tmp/x.lcmlog"
 expect_fail "bad rate" "--camera-hz: expected" euroc-semireal --euroc "$tmp/good" -o "$tmp/x.lcmlog" \
   --camera-hz 0
+# --- no output may be an input (docs/deploy.md, "Reading logs and writing outputs") ------------
+bad same; cp "$tmp/same/$imu_csv" "$tmp/imu.orig"; cp "$tmp/same/$gt_csv" "$tmp/gt.orig"
+expect_fail "-o is the IMU input" "-o .*/imu0/\./data\.csv is the input .*imu0/data\.csv \(same file\)" \
+  euroc-semireal --euroc "$tmp/same" -o "$tmp/same/mav0/imu0/./data.csv"
+expect_fail "--config-out is the ground truth" "--config-out .* is the input .*state_groundtruth_estimate0/data\.csv" \
+  euroc-semireal --euroc "$tmp/same" -o "$tmp/x.lcmlog" --config-out "$tmp/same/$gt_csv"
+cmp "$tmp/same/$imu_csv" "$tmp/imu.orig"
+cmp "$tmp/same/$gt_csv" "$tmp/gt.orig"
 echo "semireal inputs: counts and every malformed input checked"
