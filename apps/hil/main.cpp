@@ -111,6 +111,7 @@ struct Shared {
     std::unordered_map<int64_t, size_t> by_utime;
     long verdicts = 0, timings = 0, unknown_verdicts = 0, unknown_timings = 0, duplicates = 0;
     bool have_first_timing = false;
+    int64_t status_reports = 0;  // SFD_TIMING with frame_processed 0
     int64_t first_rejected[SFD_TIMING_T_NUM_REASONS] = {0};
     int64_t last_rejected[SFD_TIMING_T_NUM_REASONS] = {0};
     int32_t first_timing_features = 0;
@@ -153,6 +154,16 @@ void on_timing(const lcm_recv_buf_t *rbuf, const char *, void *) {
     const bool decoded =
         sfd_timing_t_decode(rbuf->data, 0, static_cast<int>(rbuf->data_size), &t) >= 0;
     std::lock_guard<std::mutex> lk(g.mu);
+    if (decoded && t.frame_processed == 0) {
+        // a status report while the node judges no frame: counters only, no frame's timing
+        ++g.status_reports;
+        if (!g.have_first_timing) {
+            g.have_first_timing = true;
+            std::memcpy(g.first_rejected, t.rejected, sizeof g.first_rejected);
+        }
+        std::memcpy(g.last_rejected, t.rejected, sizeof g.last_rejected);
+        return;
+    }
     Frame *fp = published_frame(decoded, t.utime, &g.unknown_timings);
     if (fp == nullptr) return;
     Frame &f = *fp;
@@ -647,8 +658,9 @@ int main(int argc, char **argv) {
     // Node-side drops during the run (SFD_TIMING rejected[], last minus first received): inputs
     // the node discarded, IMU_OVERFLOW included (IMU samples overwritten in the node's ring
     // before a frame could use them; the ring wrapping over consumed samples is not counted).
-    // DEPTH (a missing depth prior replaced), IMU_GAP / IMU_LATE (frames judged UNTESTED) and
-    // CORE are shown but are not message losses.
+    // DEPTH (a missing depth prior replaced), IMU_GAP / IMU_LATE (frames judged UNTESTED),
+    // CORE, RESTART, the FEATURE_* counts (features kept) and FRAME_GAP (frames the node never
+    // received: counted above as frames without verdict) are shown but are not message losses.
     long node_drops = 0;
     std::string rej_line;
     for (int k = 0; k < SFD_TIMING_T_NUM_REASONS; ++k) {
@@ -657,7 +669,9 @@ int main(int argc, char **argv) {
             k == SFD_TIMING_T_REJECT_DECODE || k == SFD_TIMING_T_REJECT_COUNT ||
             k == SFD_TIMING_T_REJECT_NONFINITE || k == SFD_TIMING_T_REJECT_ORDER ||
             k == SFD_TIMING_T_REJECT_CAMERA_ID || k == SFD_TIMING_T_REJECT_NO_CAMERA_INFO ||
-            k == SFD_TIMING_T_REJECT_IMU_OVERFLOW || k == SFD_TIMING_T_REJECT_CAPACITY;
+            k == SFD_TIMING_T_REJECT_IMU_OVERFLOW || k == SFD_TIMING_T_REJECT_CAPACITY ||
+            k == SFD_TIMING_T_REJECT_TIME_JUMP || k == SFD_TIMING_T_REJECT_CALIB_INTRINSICS ||
+            k == SFD_TIMING_T_REJECT_CALIB_DISTORTION || k == SFD_TIMING_T_REJECT_CALIB_EXTRINSICS;
         if (loss) node_drops += d;
         if (d != 0 || g.last_rejected[k] != 0) {
             rej_line += std::string(" ") + sfd_reject_reason_str(k) + "=" + std::to_string(d) +
@@ -673,7 +687,8 @@ int main(int argc, char **argv) {
     std::printf("| --- | --- |\n");
     std::printf("| frames published | %zu (%ld messages) |\n", fr.size(), pub.published());
     std::printf("| verdicts received | %ld |\n", g.verdicts);
-    std::printf("| timing received | %ld |\n", g.timings);
+    std::printf("| timing received | %ld (and %ld status reports: no frame judged) |\n", g.timings,
+                static_cast<long>(g.status_reports));
     std::printf("| lost: frames without verdict within %ld ms | %ld (%ld late) |\n", opt.timeout_ms,
                 no_verdict + late, late);
     std::printf("| lost: verdicts for unknown frames | %ld |\n", g.unknown_verdicts);

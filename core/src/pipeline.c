@@ -3,16 +3,34 @@
  * judgement stages over the IMU ring, the navigation side (nav.c) and the parity detector. */
 #include "sfd/sfd_pipeline.h"
 
+#include <math.h>
 #include <stddef.h>
 #include <string.h>
 
 #include "bits_equal.h"
 
 const char *sfd_reject_reason_str(int reason) {
-    static const char *const names[SFD_REJECT_NUM_REASONS] = {
-        "decode",   "count",          "nonfinite", "order",    "camera_id",
-        "depth",    "no_camera_info", "imu_gap",   "imu_late", "imu_overflow",
-        "capacity", "core",           "time_jump", "restart"};
+    static const char *const names[SFD_REJECT_NUM_REASONS] = {"decode",
+                                                              "count",
+                                                              "nonfinite",
+                                                              "order",
+                                                              "camera_id",
+                                                              "depth",
+                                                              "no_camera_info",
+                                                              "imu_gap",
+                                                              "imu_late",
+                                                              "imu_overflow",
+                                                              "capacity",
+                                                              "core",
+                                                              "time_jump",
+                                                              "restart",
+                                                              "feature_nonfinite",
+                                                              "feature_duplicate",
+                                                              "feature_outside",
+                                                              "calib_intrinsics",
+                                                              "calib_distortion",
+                                                              "calib_extrinsics",
+                                                              "frame_gap"};
     if (reason < 0 || reason >= SFD_REJECT_NUM_REASONS) return "unknown";
     return names[reason];
 }
@@ -66,6 +84,8 @@ sfd_status_t sfd_pipeline_init(sfd_pipeline_t *p, const sfd_pipeline_config_t *c
         p->slot_restart[k] = 0;
     }
     p->next_seq = 0;
+    p->period_count = 0;
+    p->period_next = 0;
     p->cur_slot = -1;
     p->stage = 0;
     p->nav_ok = 0;
@@ -139,6 +159,77 @@ int sfd_pipeline_push_imu(sfd_pipeline_t *p, const sfd_imu_sample_t *s) {
     return r;
 }
 
+/* The frame period: the median of the last in-step intervals (insertion sort of at most
+ * SFD_PIPELINE_PERIOD_SAMPLES values). */
+static int64_t frame_period(const sfd_pipeline_t *p) {
+    int64_t v[SFD_PIPELINE_PERIOD_SAMPLES] = {0};
+    const int32_t n = p->period_count;
+    for (int32_t i = 0; i < n; ++i) {
+        const int64_t x = p->period_us[i];
+        int32_t j = i;
+        while (j > 0 && v[j - 1] > x) {
+            v[j] = v[j - 1];
+            --j;
+        }
+        v[j] = x;
+    }
+    return v[n / 2];
+}
+
+/* An accepted interval dt > 0 (within the time horizon): k periods count k - 1 missing frames
+ * once 4 intervals are known; in-step intervals (<= 1.5 periods) feed the period. */
+static void count_frame_gap(sfd_pipeline_t *p, int64_t dt_us) {
+    int in_step = 1;
+    if (p->period_count >= 4) {
+        const int64_t period = frame_period(p);
+        if (period > 0 && dt_us > period + period / 2) {
+            in_step = 0;
+            const int64_t missing = (dt_us + period / 2) / period - 1;
+            if (missing > 0) p->counters.rejected[SFD_REJECT_FRAME_GAP] += missing;
+        }
+    }
+    if (!in_step) return;
+    p->period_us[p->period_next] = dt_us;
+    p->period_next = (p->period_next + 1) % SFD_PIPELINE_PERIOD_SAMPLES;
+    if (p->period_count < SFD_PIPELINE_PERIOD_SAMPLES) p->period_count++;
+}
+
+static int32_t dup_slot(int64_t track_id) {
+    uint64_t h = (uint64_t)track_id * 0x9E3779B97F4A7C15ULL;
+    h ^= h >> 29;
+    return (int32_t)(h % (uint64_t)SFD_PIPELINE_DUP_SLOTS);
+}
+
+/* Counts an accepted frame's malformed features (they stay in the frame; the detectors judge
+ * them as before): a NaN/Inf pixel, a track id repeated in the frame, a pixel outside the
+ * calibrated image. */
+static void count_malformed_features(sfd_pipeline_t *p, const sfd_frame_t *frame) {
+    for (int32_t k = 0; k < SFD_PIPELINE_DUP_SLOTS; ++k) p->dup_index[k] = -1;
+    const double w = (double)p->camera.width_px, h = (double)p->camera.height_px;
+    for (int32_t i = 0; i < frame->num_features; ++i) {
+        const sfd_feature_t *f = &frame->features[i];
+        if (!isfinite(f->u_px) || !isfinite(f->v_px)) {
+            p->counters.rejected[SFD_REJECT_FEATURE_NONFINITE]++;
+        } else if (!(f->u_px >= 0.0 && f->u_px < w && f->v_px >= 0.0 && f->v_px < h)) {
+            p->counters.rejected[SFD_REJECT_FEATURE_OUTSIDE]++;
+        }
+        /* load factor <= 1/2: an empty slot is found within SFD_PIPELINE_DUP_SLOTS probes */
+        int32_t s = dup_slot(f->track_id);
+        for (int32_t probe = 0; probe < SFD_PIPELINE_DUP_SLOTS; ++probe) {
+            const int16_t e = p->dup_index[s];
+            if (e < 0) {
+                p->dup_index[s] = (int16_t)i;
+                break;
+            }
+            if (frame->features[e].track_id == f->track_id) {
+                p->counters.rejected[SFD_REJECT_FEATURE_DUPLICATE]++;
+                break;
+            }
+            s = (s + 1) % SFD_PIPELINE_DUP_SLOTS;
+        }
+    }
+}
+
 int sfd_pipeline_push_frame(sfd_pipeline_t *p, const sfd_frame_t *frame) {
     if (p == NULL || frame == NULL) return SFD_REJECT_DECODE;
     int r = SFD_REJECT_NONE;
@@ -170,6 +261,13 @@ int sfd_pipeline_push_frame(sfd_pipeline_t *p, const sfd_frame_t *frame) {
     /* The waiting frame's IMU never came before this frame: it is judged without motion. */
     if (w >= 0) make_due(p, w, SFD_REJECT_IMU_LATE);
     p->slot_restart[slot] = (v == SFD_TIME_RESYNC);
+    if (v == SFD_TIME_RESYNC || p->last_frame_utime == INT64_MIN) {
+        p->period_count = 0; /* no interval from another time base */
+        p->period_next = 0;
+    } else {
+        count_frame_gap(p, frame->utime - p->last_frame_utime);
+    }
+    count_malformed_features(p, frame);
     p->last_frame_utime = frame->utime;
     const size_t used =
         offsetof(sfd_frame_t, features) + (size_t)frame->num_features * sizeof frame->features[0];

@@ -31,10 +31,18 @@ int sfd_lcm_decode_camera_info(const void *data, int size, sfd_camera_info_t *ms
     if (sfd_camera_info_t_decode(data, 0, size, msg) < 0) return SFD_REJECT_DECODE;
     sfd_camera_t cam;
     sfd_extrinsics_t e;
+    /* the cause, in the order the camera model checks it (calibration_valid) */
+    const double k[4] = {msg->fx, msg->fy, msg->cx, msg->cy};
+    if (msg->width <= 0 || msg->height <= 0 || !all_finite(k, 4) || !(msg->fx > 0.0) ||
+        !(msg->fy > 0.0)) {
+        return SFD_REJECT_CALIB_INTRINSICS;
+    }
     if (sfd_camera_init(&cam, msg->distortion_model, msg->width, msg->height, msg->fx, msg->fy,
-                        msg->cx, msg->cy, msg->distortion) != SFD_OK ||
-        sfd_extrinsics_from_matrix(&e, msg->T_imu_cam) != SFD_OK) {
-        return SFD_REJECT_NONFINITE;
+                        msg->cx, msg->cy, msg->distortion) != SFD_OK) {
+        return SFD_REJECT_CALIB_DISTORTION; /* unknown model or its coefficients */
+    }
+    if (sfd_extrinsics_from_matrix(&e, msg->T_imu_cam) != SFD_OK) {
+        return SFD_REJECT_CALIB_EXTRINSICS;
     }
     *camera = cam;
     *ext = e;

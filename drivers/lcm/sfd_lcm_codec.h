@@ -35,9 +35,11 @@ int sfd_lcm_decode_imu(const void *data, int size, sfd_imu_sample_t *out);
 /**
  * @brief Decodes CAMERA_INFO into a validated camera model and extrinsics.
  * @param msg  caller-owned scratch for the wire struct.
- * @return SFD_REJECT_NONE on success; SFD_REJECT_DECODE; SFD_REJECT_NONFINITE for a calibration
- *         the camera model or the extrinsics reject (non-finite, non-positive focal length,
- *         unknown distortion model, non-rigid transform).
+ * @return SFD_REJECT_NONE on success; SFD_REJECT_DECODE; by cause of a calibration the camera
+ *         model or the extrinsics reject: SFD_REJECT_CALIB_INTRINSICS (size <= 0, focal lengths
+ *         not > 0, a NaN/Inf intrinsic), SFD_REJECT_CALIB_DISTORTION (unknown model, NaN/Inf or,
+ *         for pinhole, non-zero coefficients), SFD_REJECT_CALIB_EXTRINSICS (not a rigid
+ *         transform).
  */
 int sfd_lcm_decode_camera_info(const void *data, int size, sfd_camera_info_t *msg,
                                sfd_camera_t *camera, sfd_extrinsics_t *ext, int32_t *camera_id);

@@ -39,6 +39,7 @@ sfd_status_t sfd_node_init(sfd_node_t *node, const sfd_node_config_t *cfg,
         node->ingest_us[k] = 0;
     }
     node->ingest_next = 0;
+    node->inputs_since_timing = 0;
     return SFD_OK;
 }
 
@@ -68,6 +69,17 @@ static int64_t publish_state(sfd_node_t *n, const sfd_pipeline_output_t *o) {
 typedef struct {
     int64_t ingest_us, parity_us, association_us, update_us;
 } stage_times_t;
+
+/* The counters every SFD_TIMING carries. */
+static void fill_counters(const sfd_node_t *n, sfd_timing_t *t) {
+    const sfd_pipeline_counters_t *c = &n->pipe.counters;
+    t->frames_in = c->frames_in;
+    t->frames_processed = c->frames_processed;
+    t->frames_untested = c->frames_untested;
+    t->imu_in = c->imu_in;
+    t->camera_info_in = c->camera_info_in;
+    for (int k = 0; k < SFD_REJECT_NUM_REASONS; ++k) t->rejected[k] = c->rejected[k];
+}
 
 static void publish_results(sfd_node_t *n, const sfd_pipeline_output_t *o, const stage_times_t *st,
                             int64_t t_start) {
@@ -104,9 +116,26 @@ static void publish_results(sfd_node_t *n, const sfd_pipeline_output_t *o, const
     t->budget_exhausted = o->budget_exhausted;
     t->total_us = clamp_i32(now_us(n) - t_start + st->ingest_us);
     t->publish_us = clamp_i32(publish_us);
-    for (int k = 0; k < SFD_REJECT_NUM_REASONS; ++k) t->rejected[k] = n->pipe.counters.rejected[k];
+    t->frame_processed = 1;
+    fill_counters(n, t);
     size = sfd_timing_t_encode(n->out_buf, 0, SFD_NODE_MAX_MESSAGE, t);
     (void)send_out(n, SFD_NODE_OUT_TIMING, size, v->utime);
+    n->inputs_since_timing = 0;
+}
+
+/* A status report while no frame is judged (SFD_TIMING with frame_processed 0): the counters,
+ * at the newest accepted input time. */
+static void publish_status(sfd_node_t *n) {
+    sfd_timing_t *t = &n->wire_timing;
+    memset(t, 0, sizeof *t);
+    const int64_t ti = n->pipe.last_imu_utime, tf = n->pipe.last_frame_utime;
+    t->utime = ti > tf ? ti : tf;
+    if (t->utime == INT64_MIN) t->utime = 0; /* nothing accepted yet */
+    t->frame_processed = 0;
+    fill_counters(n, t);
+    const int size = sfd_timing_t_encode(n->out_buf, 0, SFD_NODE_MAX_MESSAGE, t);
+    (void)send_out(n, SFD_NODE_OUT_TIMING, size, t->utime);
+    n->inputs_since_timing = 0;
 }
 
 /* Decode time recorded for the frame at utime (0 when not recorded). */
@@ -198,6 +227,7 @@ static void handle_features(sfd_node_t *n, const void *data, int32_t size) {
 }
 
 void sfd_node_handle(sfd_node_t *node, sfd_node_input_t kind, const void *data, int32_t size) {
+    node->inputs_since_timing++;
     switch (kind) {
         case SFD_NODE_IMU:
             handle_imu(node, data, size);
@@ -219,6 +249,10 @@ void sfd_node_handle(sfd_node_t *node, sfd_node_input_t kind, const void *data, 
         default:
             sfd_pipeline_count_reject(&node->pipe, SFD_REJECT_DECODE);
             break;
+    }
+    /* no frame judged for a while (every input refused, no camera, a time glitch): say so */
+    if (node->cfg.publish_timing && node->inputs_since_timing >= SFD_NODE_STATUS_EVERY_INPUTS) {
+        publish_status(node);
     }
 }
 

@@ -66,6 +66,11 @@ typedef sfd_pipeline_counters_t sfd_node_counters_t;
 
 enum { SFD_NODE_MAX_MESSAGE = 16384 };
 
+/** Inputs handled without a judged frame after which SFD_TIMING is published as a status report
+ *  (frame_processed 0): about 1 Hz for a 200 Hz IMU and 20 Hz frames that are all refused, never
+ *  while frames are judged (each judged frame publishes SFD_TIMING and restarts the count). */
+enum { SFD_NODE_STATUS_EVERY_INPUTS = 200 };
+
 typedef struct {
     sfd_node_config_t cfg;
     sfd_node_publish_fn publish;
@@ -77,6 +82,7 @@ typedef struct {
     int64_t ingest_utime[SFD_PIPELINE_FRAME_SLOTS];
     int64_t ingest_us[SFD_PIPELINE_FRAME_SLOTS];
     int32_t ingest_next;
+    int32_t inputs_since_timing; /**< inputs handled since the last SFD_TIMING */
     /* scratch (kept here, not on the stack) */
     sfd_frame_t frame;
     sfd_feature_frame_t wire_features;

@@ -248,8 +248,9 @@ static void lcm_features_decode_validates_before_core(void **state) {
 }
 
 /* GIVEN IMU and CAMERA_INFO messages WHEN decoded THEN valid ones fill core structs; non-finite
- * IMU values and invalid calibrations (focal length 0, unknown model, non-rigid T) are rejected
- * and leave the outputs untouched. */
+ * IMU values are rejected as nonfinite, invalid calibrations by cause (focal length 0, height 0,
+ * NaN principal point: intrinsics; unknown model, Inf coefficient: distortion; non-rigid T:
+ * extrinsics), and the outputs are left untouched. */
 static void lcm_imu_and_camera_info_validated(void **state) {
     (void)state;
     SFD_REQ("SFD-LCM-003");
@@ -295,18 +296,34 @@ static void lcm_imu_and_camera_info_validated(void **state) {
     n = sfd_camera_info_t_encode(g_buf, 0, BUF, &bad);
     id = 99;
     assert_int_equal(sfd_lcm_decode_camera_info(g_buf, n, &scratch, &cam, &ext, &id),
-                     SFD_REJECT_NONFINITE);
+                     SFD_REJECT_CALIB_INTRINSICS);
     assert_int_equal(id, 99);
+    bad = ci;
+    bad.height = 0;
+    n = sfd_camera_info_t_encode(g_buf, 0, BUF, &bad);
+    assert_int_equal(sfd_lcm_decode_camera_info(g_buf, n, &scratch, &cam, &ext, &id),
+                     SFD_REJECT_CALIB_INTRINSICS);
+    bad = ci;
+    bad.cy = NAN;
+    n = sfd_camera_info_t_encode(g_buf, 0, BUF, &bad);
+    assert_int_equal(sfd_lcm_decode_camera_info(g_buf, n, &scratch, &cam, &ext, &id),
+                     SFD_REJECT_CALIB_INTRINSICS);
     bad = ci;
     bad.distortion_model = 7;
     n = sfd_camera_info_t_encode(g_buf, 0, BUF, &bad);
     assert_int_equal(sfd_lcm_decode_camera_info(g_buf, n, &scratch, &cam, &ext, &id),
-                     SFD_REJECT_NONFINITE);
+                     SFD_REJECT_CALIB_DISTORTION);
+    bad = ci;
+    bad.distortion[2] = INFINITY;
+    n = sfd_camera_info_t_encode(g_buf, 0, BUF, &bad);
+    assert_int_equal(sfd_lcm_decode_camera_info(g_buf, n, &scratch, &cam, &ext, &id),
+                     SFD_REJECT_CALIB_DISTORTION);
     bad = ci;
     bad.T_imu_cam[0] = 2.0;
     n = sfd_camera_info_t_encode(g_buf, 0, BUF, &bad);
     assert_int_equal(sfd_lcm_decode_camera_info(g_buf, n, &scratch, &cam, &ext, &id),
-                     SFD_REJECT_NONFINITE);
+                     SFD_REJECT_CALIB_EXTRINSICS);
+    assert_int_equal(id, 99);
 }
 
 static sfd_node_t g_node;
@@ -524,6 +541,64 @@ static void lcm_node_follows_first_camera_even_with_negative_id(void **state) {
     assert_int_equal(g_node.camera_id, 5);
 }
 
+static int g_status_reports, g_frame_timings;
+
+static void keep_timing(void *ctx, sfd_node_output_t kind, const void *data, int32_t size,
+                        int64_t utime) {
+    (void)ctx;
+    (void)utime;
+    if (kind != SFD_NODE_OUT_TIMING) return;
+    assert_int_equal(sfd_timing_t_decode(data, 0, size, &g_last_timing), size);
+    if (g_last_timing.frame_processed) {
+        g_frame_timings++;
+    } else {
+        g_status_reports++;
+    }
+}
+
+/* GIVEN a node with no calibration, fed 200 Hz IMU and 20 Hz frames WHEN every frame is refused
+ * THEN SFD_TIMING still comes, as a status report (frame_processed 0) after every
+ * SFD_NODE_STATUS_EVERY_INPUTS inputs, with the counters (frames in, no_camera_info); WHEN the
+ * calibration comes and frames are judged THEN each judged frame publishes its SFD_TIMING
+ * (frame_processed 1) and no status report is added. */
+static void lcm_node_reports_status_while_no_frame_is_judged(void **state) {
+    (void)state;
+    sfd_node_config_t cfg;
+    sfd_node_config_default(&cfg);
+    cfg.params.method = SFD_METHOD_PARITY;
+    assert_status(sfd_node_init(&g_node, &cfg, keep_timing, NULL, NULL), SFD_OK);
+    g_status_reports = g_frame_timings = 0;
+    int inputs = 0;
+    for (int i = 1; i <= 400; ++i) {
+        handle_imu_at(5000 * (int64_t)i, 9.81);
+        ++inputs;
+        if (i % 10 == 5) {
+            handle_frame(5000 * (int64_t)i, 0);
+            ++inputs;
+        }
+    }
+    assert_int_equal(g_frame_timings, 0);
+    assert_int_equal(g_status_reports, inputs / SFD_NODE_STATUS_EVERY_INPUTS);
+    assert_int_equal(g_last_timing.frame_processed, 0);
+    assert_true(g_last_timing.frames_in >= 30); /* the frames before the 400th input */
+    assert_true(g_last_timing.rejected[SFD_TIMING_T_REJECT_NO_CAMERA_INFO] ==
+                g_last_timing.frames_in);
+    assert_true(g_last_timing.imu_in + g_last_timing.frames_in ==
+                2 * (int64_t)SFD_NODE_STATUS_EVERY_INPUTS);
+    assert_true(g_last_timing.utime > 0);
+    handle_camera_info(0);
+    const int status_before = g_status_reports;
+    for (int i = 401; i <= 1200; ++i) {
+        handle_imu_at(5000 * (int64_t)i, 9.81);
+        if (i % 10 == 5) handle_frame(5000 * (int64_t)i, 0);
+    }
+    assert_int_equal(g_status_reports, status_before);
+    assert_int_equal(g_frame_timings, 80);
+    assert_int_equal(g_last_timing.frame_processed, 1);
+    assert_true(g_last_timing.frames_processed == 80);
+    assert_true(g_last_timing.camera_info_in == 1);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(lcm_every_type_round_trips_at_max_size),
@@ -534,6 +609,7 @@ int main(void) {
         cmocka_unit_test(lcm_node_reports_imu_overflow_only_for_needed_samples),
         cmocka_unit_test(lcm_node_waiting_filter_keeps_its_rest_window),
         cmocka_unit_test(lcm_node_reports_its_send_time_as_publish_us),
+        cmocka_unit_test(lcm_node_reports_status_while_no_frame_is_judged),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

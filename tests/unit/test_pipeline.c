@@ -402,6 +402,43 @@ static void a_known_map_and_start_localize_from_the_first_frame(void **state) {
     assert_int_equal(g_p.nav.starts, 1);
 }
 
+/* GIVEN a running pipeline WHEN a frame carries a NaN pixel, a repeated track id and a pixel
+ * outside the image THEN each is counted once per feature (the frame is still judged, every
+ * feature in its verdict); WHEN 3 frames are missing between two frames (after 10 in step)
+ * THEN frame_gap counts 3, and an interval of 1.4 periods counts nothing. */
+static void malformed_features_and_missing_frames_are_counted(void **state) {
+    (void)state;
+    start(&g_p);
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 14);
+    int k = 0, judged = 0;
+    assert_int_equal(feed(&g_p, &rng, &k, 1, 10, 0, &judged), 10);
+    assert_true(g_p.counters.rejected[SFD_REJECT_FRAME_GAP] == 0);
+    /* frames 11-13 lost on the transport: IMU up to frame 14, then frame 14 */
+    assert_int_equal(feed(&g_p, &rng, &k, 14, 14, 0, &judged), 1);
+    assert_true(g_p.counters.rejected[SFD_REJECT_FRAME_GAP] == 3);
+    make_frame(&rng, 15, &g_frame);
+    g_frame.utime += 20000; /* 1.4 periods after frame 14: not a gap */
+    g_frame.features[3].u_px = NAN;
+    g_frame.features[5].track_id = g_frame.features[4].track_id;
+    g_frame.features[6].v_px = 480.0; /* the image is 640 x 480 */
+    g_frame.features[7].u_px = -0.5;
+    sfd_imu_sample_t s;
+    do {
+        imu_sample(&rng, ++k, &s);
+        assert_int_equal(sfd_pipeline_push_imu(&g_p, &s), SFD_REJECT_NONE);
+    } while (s.t_us < g_frame.utime);
+    assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_NONE);
+    assert_status(sfd_pipeline_judge(&g_p), SFD_OK);
+    assert_int_equal(sfd_pipeline_output(&g_p)->verdict.num_features, NPTS);
+    assert_true(g_p.counters.rejected[SFD_REJECT_FEATURE_NONFINITE] == 1);
+    assert_true(g_p.counters.rejected[SFD_REJECT_FEATURE_DUPLICATE] == 1);
+    assert_true(g_p.counters.rejected[SFD_REJECT_FEATURE_OUTSIDE] == 2);
+    assert_true(g_p.counters.rejected[SFD_REJECT_FRAME_GAP] == 3);
+    assert_string_equal(sfd_reject_reason_str(SFD_REJECT_FRAME_GAP), "frame_gap");
+    assert_string_equal(sfd_reject_reason_str(SFD_REJECT_NUM_REASONS), "unknown");
+}
+
 /* GIVEN null arguments or a method that needs the filter with the filter off THEN init refuses. */
 static void init_refuses_invalid_configurations(void **state) {
     (void)state;
@@ -433,6 +470,7 @@ int main(void) {
         cmocka_unit_test(a_future_stamped_message_is_refused_and_never_the_reference),
         cmocka_unit_test(a_restarted_publisher_is_followed_after_n_messages),
         cmocka_unit_test(a_known_map_and_start_localize_from_the_first_frame),
+        cmocka_unit_test(malformed_features_and_missing_frames_are_counted),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -51,6 +51,12 @@ extern "C" {
 /** Frames the pipeline holds between push_frame and the end of its judgement. */
 #define SFD_PIPELINE_FRAME_SLOTS 2
 
+/** Frame intervals whose median is the frame period of the frame_gap counter. */
+#define SFD_PIPELINE_PERIOD_SAMPLES 8
+
+/** Slots of the per-frame duplicate-track index (load factor <= 1/2). */
+#define SFD_PIPELINE_DUP_SLOTS (2 * SFD_MAX_FEATURES + 1)
+
 typedef struct {
     sfd_params_t params;          /**< detector (method: any sfd_method_t) */
     sfd_nav_config_t nav;         /**< the filter (required by oprf, ransac1, ransacf, both) */
@@ -100,7 +106,11 @@ typedef struct {
     sfd_time_guard_t frame_time; /**< and of the frames */
     int64_t last_imu_utime;      /**< newest accepted IMU sample (us), INT64_MIN before */
     int64_t last_frame_utime;    /**< newest accepted frame (us), INT64_MIN before */
-    int64_t prev_frame_utime;    /**< the last judged frame (us) */
+    /* the frame period for the frame_gap counter: the median of the last in-step intervals */
+    int64_t period_us[SFD_PIPELINE_PERIOD_SAMPLES];
+    int32_t period_count;
+    int32_t period_next;
+    int64_t prev_frame_utime; /**< the last judged frame (us) */
     int32_t have_prev_frame;
     /* frames held: waiting for IMU or due, judged oldest first */
     sfd_frame_t frames[SFD_PIPELINE_FRAME_SLOTS];
@@ -121,6 +131,7 @@ typedef struct {
     /* scratch */
     int8_t final_status[SFD_MAX_FEATURES];
     uint8_t skip[SFD_MAX_FEATURES];
+    int16_t dup_index[SFD_PIPELINE_DUP_SLOTS]; /**< track id -> feature, -1 empty (one frame) */
 } sfd_pipeline_t;
 
 /** @brief Defaults: sfd_params_default(), sfd_nav_config_default(),
@@ -157,7 +168,13 @@ int sfd_pipeline_set_camera(sfd_pipeline_t *p, const sfd_camera_t *cam,
 int sfd_pipeline_push_imu(sfd_pipeline_t *p, const sfd_imu_sample_t *sample);
 
 /**
- * @brief One feature frame (copied). A waiting frame becomes due first, without IMU. Its time is
+ * @brief One feature frame (copied). A waiting frame becomes due first, without IMU. An
+ *        accepted frame's malformed features are counted, per feature (they stay in the frame):
+ *        a NaN/Inf pixel (feature_nonfinite), a track id that came earlier in the frame
+ *        (feature_duplicate), a pixel outside the calibrated image (feature_outside); frames
+ *        missing before it are counted (frame_gap: an interval of k frame periods, the period
+ *        being the median of the last SFD_PIPELINE_PERIOD_SAMPLES in-step intervals, counts
+ *        k - 1 once 4 intervals are known; an interval over 1.5 periods is a gap). Its time is
  *        judged by the time-glitch policy (sfd_time_guard.h); the frame that makes a new time base
  *        (a restarted camera or publisher) is accepted, and before it is judged the frame side
  *        restarts (parity window, filter, tracks; counted as restart), after the frames of the

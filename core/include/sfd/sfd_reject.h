@@ -17,7 +17,7 @@ typedef enum {
     SFD_REJECT_NONE = -1,
     SFD_REJECT_DECODE = 0,    /**< the buffer does not decode (short, corrupt, wrong type) */
     SFD_REJECT_COUNT = 1,     /**< num_features outside [0, wire capacity] */
-    SFD_REJECT_NONFINITE = 2, /**< NaN/Inf where a number is required */
+    SFD_REJECT_NONFINITE = 2, /**< NaN/Inf where a number is required (IMU) */
     SFD_REJECT_ORDER = 3,     /**< utime not after the channel's previous message */
     SFD_REJECT_CAMERA_ID = 4, /**< camera_id unknown (no CAMERA_INFO for it) */
     SFD_REJECT_DEPTH =
@@ -32,7 +32,17 @@ typedef enum {
                                         or one of the first messages of a restarted stream) */
     SFD_REJECT_RESTART = 13,       /**< not a message: the pipeline's frame or IMU side restarted
                                         on a new time base (sfd_time_guard.h) */
-    SFD_REJECT_NUM_REASONS = 14
+    SFD_REJECT_FEATURE_NONFINITE = 14, /**< features (not frames) with a NaN/Inf pixel coordinate:
+                                            kept, never judged (UNTESTED) */
+    SFD_REJECT_FEATURE_DUPLICATE = 15, /**< features whose track id came earlier in the frame */
+    SFD_REJECT_FEATURE_OUTSIDE = 16,   /**< features outside the calibrated image (kept) */
+    SFD_REJECT_CALIB_INTRINSICS = 17,  /**< CAMERA_INFO: size, focal lengths or principal point
+                                            not valid (<= 0, NaN) */
+    SFD_REJECT_CALIB_DISTORTION = 18,  /**< CAMERA_INFO: unknown model, or its coefficients */
+    SFD_REJECT_CALIB_EXTRINSICS = 19,  /**< CAMERA_INFO: T_imu_cam not a rigid transform */
+    SFD_REJECT_FRAME_GAP = 20,         /**< not a message: frames missing between accepted
+                                            frames (a gap of k frame periods counts k - 1) */
+    SFD_REJECT_NUM_REASONS = 21
 } sfd_reject_reason_t;
 
 /** Name of a rejection reason ("decode", "count", ...); "unknown" out of range. */
