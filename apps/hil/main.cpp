@@ -38,6 +38,7 @@
 #include "sfd_log_reader.h"
 #include "sfd_output.h"
 #include "sfd_timing_t.h"
+#include "sfd/sfd_prng.h"
 
 namespace {
 
@@ -87,7 +88,25 @@ struct Options {
     long timeout_ms = 1000;
     long warmup = 10;
     bool restamp = true;
+    // Fault injection on the publisher's side (docs/hil.md "Fault injection"). Frame indexes
+    // count the source's FEATURES messages from 0.
+    struct Faults {
+        double drop = 0.0, dup = 0.0, reorder = 0.0;  // per frame of [from, to]
+        long from = 0, to = -1;                       // to < 0: to the end
+        long future_frame = -1;                       // this frame stamped kFutureUs ahead
+        long restart_frame = -1;  // from this frame on, every message kRestartUs earlier
+        long stall_frame = -1;    // the publisher stops stall_ms before this frame
+        long stall_ms = 0;
+        uint64_t seed = 1;
+        bool any() const {
+            return drop > 0.0 || dup > 0.0 || reorder > 0.0 || future_frame >= 0 ||
+                   restart_frame >= 0 || stall_frame >= 0;
+        }
+    } faults;
 };
+
+constexpr int64_t kFutureUs = 1000LL * 1000000LL;  // a future-stamped frame: +1000 s
+constexpr int64_t kRestartUs = 100LL * 1000000LL;  // a restarted publisher: 100 s back
 
 // One FEATURES frame: what was published and what came back.
 struct Frame {
@@ -102,6 +121,8 @@ struct Frame {
     int32_t publish_us = 0;  // of total_us: the node's sends of SFD_VERDICT and SFD_STATE
     int32_t hypotheses = 0;
     int8_t budget_exhausted = 0;
+    bool refused = false;  // a fault the node must refuse (reordered, future-stamped, a restarted
+                           // stream's first frames): no verdict expected
 };
 
 struct Shared {
@@ -111,7 +132,9 @@ struct Shared {
     std::unordered_map<int64_t, size_t> by_utime;
     long verdicts = 0, timings = 0, unknown_verdicts = 0, unknown_timings = 0, duplicates = 0;
     bool have_first_timing = false;
-    int64_t status_reports = 0;  // SFD_TIMING with frame_processed 0
+    int64_t status_reports = 0;       // SFD_TIMING with frame_processed 0
+    int64_t last_frames_in = 0;       // the node's FEATURES count in the newest SFD_TIMING
+    int64_t last_frames_refused = 0;  // of those, refused
     int64_t first_rejected[SFD_TIMING_T_NUM_REASONS] = {0};
     int64_t last_rejected[SFD_TIMING_T_NUM_REASONS] = {0};
     int32_t first_timing_features = 0;
@@ -157,6 +180,8 @@ void on_timing(const lcm_recv_buf_t *rbuf, const char *, void *) {
     if (decoded && t.frame_processed == 0) {
         // a status report while the node judges no frame: counters only, no frame's timing
         ++g.status_reports;
+        g.last_frames_in = std::max(g.last_frames_in, t.frames_in);
+        g.last_frames_refused = std::max(g.last_frames_refused, t.frames_refused);
         if (!g.have_first_timing) {
             g.have_first_timing = true;
             std::memcpy(g.first_rejected, t.rejected, sizeof g.first_rejected);
@@ -183,6 +208,8 @@ void on_timing(const lcm_recv_buf_t *rbuf, const char *, void *) {
         std::memcpy(g.first_rejected, t.rejected, sizeof g.first_rejected);
     }
     std::memcpy(g.last_rejected, t.rejected, sizeof g.last_rejected);
+    g.last_frames_in = std::max(g.last_frames_in, t.frames_in);
+    g.last_frames_refused = std::max(g.last_frames_refused, t.frames_refused);
     g.cv.notify_all();
 }
 
@@ -214,9 +241,28 @@ class Publisher : public sfdsim::FlightSink {
             t0_ns_ = mono_ns();
             offset_us_ = opt_.restamp && size >= 16 ? realtime_us() - get_be64(buf_.data() + 8) : 0;
         }
-        if (opt_.restamp && size >= 16) {
-            put_be64(buf_.data() + 8, get_be64(buf_.data() + 8) + offset_us_);
-            frame_utime += offset_us_;
+        const Options::Faults &fa = opt_.faults;
+        const long k = features ? frame_index_++ : -1;
+        if (features && k == fa.restart_frame) {
+            shift_us_ -= kRestartUs;  // this frame and every message after it
+            restart_left_ = resync_messages_ - 1;
+            ++restarts_;
+        }
+        if (size >= 16 && (opt_.restamp || shift_us_ != 0)) {
+            const int64_t add = (opt_.restamp ? offset_us_ : 0) + shift_us_;
+            put_be64(buf_.data() + 8, get_be64(buf_.data() + 8) + add);
+            frame_utime += add;
+        }
+        bool refused = false;
+        if (features && k == fa.future_frame) {
+            put_be64(buf_.data() + 8, get_be64(buf_.data() + 8) + kFutureUs);
+            frame_utime += kFutureUs;
+            refused = true;
+            ++future_;
+        }
+        if (features && restart_left_ > 0) {  // a restarted stream's first N - 1 frames
+            refused = true;
+            --restart_left_;
         }
         int64_t sched = 0;
         if (opt_.rate > 0.0) {
@@ -229,22 +275,51 @@ class Publisher : public sfdsim::FlightSink {
                 if (g_stop) return false;
             }
         }
-        size_t index = 0;
-        if (features) {
-            std::lock_guard<std::mutex> lk(g.mu);
-            index = g.frames.size();
-            Frame f;
-            f.utime = frame_utime;
-            f.sched_ns = sched;
-            f.features = n_feat;
-            g.frames.push_back(f);
-            g.by_utime.emplace(frame_utime, index);  // a repeated utime keeps the first frame
-            g.frames[index].pub_ns = mono_ns();
+        if (features && k == fa.stall_frame && fa.stall_ms > 0) {
+            // the publisher goes silent, then carries on at its pace from where it stopped (no
+            // burst of the backlog): the node sees every message, stall_ms late
+            std::this_thread::sleep_for(std::chrono::milliseconds(fa.stall_ms));
+            t0_ns_ += fa.stall_ms * 1000000LL;
+            ++stalls_;
         }
-        if (lcm_publish(lcm_, out->c_str(), buf_.data(), static_cast<unsigned int>(size)) != 0) {
-            ++publish_failures_;
+        // drop / duplicate / reorder: one draw per frame inside the window, none while a
+        // reordered frame is held (it goes out after the next frame published)
+        enum { kPass, kDrop, kDup, kHold } act = kPass;
+        const bool in_window = features && k >= fa.from && (fa.to < 0 || k <= fa.to);
+        if (in_window && (fa.drop > 0.0 || fa.dup > 0.0 || fa.reorder > 0.0)) {
+            const double u = sfd_prng_uniform(&rng_);
+            if (held_.empty()) {
+                act = u < fa.drop                         ? kDrop
+                      : u < fa.drop + fa.dup              ? kDup
+                      : u < fa.drop + fa.dup + fa.reorder ? kHold
+                                                          : kPass;
+            } else if (u < fa.drop) {
+                act = kDrop;
+            }
         }
-        ++published_;
+        if (act == kDrop) {
+            ++dropped_;
+            return !g_stop;
+        }
+        if (act == kHold) {
+            held_ = buf_;
+            held_utime_ = frame_utime;
+            held_features_ = n_feat;
+            held_sched_ = sched;
+            ++reordered_;
+            return !g_stop;
+        }
+        const size_t index = features ? record(frame_utime, sched, n_feat, refused) : 0;
+        publish(*out, buf_);
+        if (act == kDup) {
+            publish(*out, buf_);  // the second copy: refused as out of order, no record
+            ++duplicated_;
+        }
+        if (features && !held_.empty()) {  // the reordered frame, after the one that followed it
+            record(held_utime_, held_sched_, held_features_, true);
+            publish(*out, held_);
+            held_.clear();
+        }
         if (features && opt_.rate <= 0.0) {
             // Closed loop: the next frame waits for this frame's verdict (or the timeout).
             std::unique_lock<std::mutex> lk(g.mu);
@@ -258,11 +333,45 @@ class Publisher : public sfdsim::FlightSink {
         return !g_stop;
     }
 
+    /// The node's resync count (time_resync_messages of its config): a restarted stream's first
+    /// N - 1 frames are refused.
+    void set_resync_messages(int n) { resync_messages_ = n; }
+    long dropped() const { return dropped_; }
+    long duplicated() const { return duplicated_; }
+    long reordered() const { return reordered_; }
+    long future() const { return future_; }
+    long restarts() const { return restarts_; }
+    long stalls() const { return stalls_; }
+    long frame_copies() const { return frame_copies_; }
+
     long published() const { return published_; }
     long malformed() const { return malformed_; }
     long publish_failures() const { return publish_failures_; }
 
   private:
+    size_t record(int64_t frame_utime, int64_t sched, int32_t n_feat, bool refused) {
+        std::lock_guard<std::mutex> lk(g.mu);
+        const size_t index = g.frames.size();
+        Frame f;
+        f.utime = frame_utime;
+        f.sched_ns = sched;
+        f.features = n_feat;
+        f.refused = refused;
+        g.frames.push_back(f);
+        g.by_utime.emplace(frame_utime, index);  // a repeated utime keeps the first frame
+        g.frames[index].pub_ns = mono_ns();
+        return index;
+    }
+
+    void publish(const std::string &channel, const std::vector<uint8_t> &msg) {
+        if (lcm_publish(lcm_, channel.c_str(), msg.data(), static_cast<unsigned int>(msg.size())) !=
+            0) {
+            ++publish_failures_;
+        }
+        ++published_;
+        if (&channel == &ch_.features) ++frame_copies_;
+    }
+
     // The configured channel of a sensor message given by its default or configured name.
     const std::string *channel_of(const char *c) const {
         if (!std::strcmp(c, "IMU") || ch_.imu == c) return &ch_.imu;
@@ -280,6 +389,23 @@ class Publisher : public sfdsim::FlightSink {
     bool started_ = false;
     int64_t t0_event_us_ = 0, t0_ns_ = 0, offset_us_ = 0;
     long published_ = 0, malformed_ = 0, publish_failures_ = 0;
+    // fault injection
+    sfd_prng_t rng_ = make_rng(opt_.faults.seed);
+    long frame_index_ = 0;
+    int64_t shift_us_ = 0;
+    int resync_messages_ = 5;
+    int restart_left_ = 0;
+    std::vector<uint8_t> held_;
+    int64_t held_utime_ = 0, held_sched_ = 0;
+    int32_t held_features_ = 0;
+    long dropped_ = 0, duplicated_ = 0, reordered_ = 0, future_ = 0, restarts_ = 0, stalls_ = 0;
+    long frame_copies_ = 0;
+
+    static sfd_prng_t make_rng(uint64_t seed) {
+        sfd_prng_t r;
+        sfd_prng_seed(&r, seed);
+        return r;
+    }
 };
 
 // Plays an LCM log through the one bounded reader of the tools (sfd_log_reader.h: lengths checked
@@ -343,6 +469,18 @@ void usage(FILE *out) {
         "  --no-restamp       publish the recorded utimes (default: shifted so that the first\n"
         "                     message is at the wall-clock time now, so a running node accepts\n"
         "                     repeated runs)\n"
+        "Fault injection (docs/hil.md; frame indexes count the source's frames from 0):\n"
+        "  --fault-drop P       drop a frame with probability P (in --fault-frames)\n"
+        "  --fault-dup P        publish a frame twice with probability P\n"
+        "  --fault-reorder P    publish a frame after the next one with probability P\n"
+        "  --fault-frames A:B   the frames the three above apply to (all)\n"
+        "  --fault-future-frame N   stamp frame N 1000 s in the future\n"
+        "  --fault-restart-frame N  from frame N on, stamp every message 100 s earlier (a\n"
+        "                       restarted publisher; the node's first N - 1 are refused)\n"
+        "  --fault-stall-frame N    stop publishing --fault-stall-ms before frame N, then go\n"
+        "                       on at the pace from there (every message late, none lost)\n"
+        "  --fault-stall-ms MS  (1000)\n"
+        "  --fault-seed N       seed of the fault draws (1)\n"
         "SIGINT/SIGTERM: stop publishing, wait up to --timeout-ms for outstanding verdicts (a\n"
         "second signal: at once), report what was measured.\n"
         "Exit: 0 ok; 2 bad usage or input; 3 a frame missed the budget or messages were lost;\n"
@@ -459,11 +597,49 @@ int main(int argc, char **argv) {
             opt.warmup = v;
         } else if (!std::strcmp(a, "--no-restamp")) {
             opt.restamp = false;
+        } else if (!std::strcmp(a, "--fault-drop") && has) {
+            if (!parse_double(argv[++i], 0.0, 1.0, &opt.faults.drop)) return bad("0..1");
+        } else if (!std::strcmp(a, "--fault-dup") && has) {
+            if (!parse_double(argv[++i], 0.0, 1.0, &opt.faults.dup)) return bad("0..1");
+        } else if (!std::strcmp(a, "--fault-reorder") && has) {
+            if (!parse_double(argv[++i], 0.0, 1.0, &opt.faults.reorder)) return bad("0..1");
+        } else if (!std::strcmp(a, "--fault-frames") && has) {
+            const std::string r = argv[++i];
+            const size_t c = r.find(':');
+            long lo = 0, hi = 0;
+            if (c == std::string::npos ||
+                !sfdapp::parse_long(r.substr(0, c).c_str(), 0, 100000000, &lo) ||
+                !sfdapp::parse_long(r.substr(c + 1).c_str(), lo, 100000000, &hi)) {
+                return bad("A:B with 0 <= A <= B");
+            }
+            opt.faults.from = lo;
+            opt.faults.to = hi;
+        } else if (!std::strcmp(a, "--fault-future-frame") && has) {
+            if (!sfdapp::parse_long(argv[++i], 0, 100000000, &opt.faults.future_frame))
+                return bad("a frame index");
+        } else if (!std::strcmp(a, "--fault-restart-frame") && has) {
+            if (!sfdapp::parse_long(argv[++i], 0, 100000000, &opt.faults.restart_frame))
+                return bad("a frame index");
+        } else if (!std::strcmp(a, "--fault-stall-frame") && has) {
+            if (!sfdapp::parse_long(argv[++i], 0, 100000000, &opt.faults.stall_frame))
+                return bad("a frame index");
+            if (opt.faults.stall_ms == 0) opt.faults.stall_ms = 1000;
+        } else if (!std::strcmp(a, "--fault-stall-ms") && has) {
+            if (!sfdapp::parse_long(argv[++i], 1, 600000, &opt.faults.stall_ms))
+                return bad("1..600000");
+        } else if (!std::strcmp(a, "--fault-seed") && has) {
+            if (!sfdapp::parse_long(argv[++i], 0, 2147483647L, &v))
+                return bad("a non-negative integer");
+            opt.faults.seed = static_cast<uint64_t>(v);
         } else {
             std::fprintf(stderr, "sfd-hil: unknown or incomplete option: %s\n", a);
             usage(stderr);
             return 2;
         }
+    }
+    if (opt.faults.drop + opt.faults.dup + opt.faults.reorder > 1.0) {
+        std::fprintf(stderr, "sfd-hil: --fault-drop + --fault-dup + --fault-reorder exceed 1\n");
+        return 2;
     }
     if (opt.log_path.empty() == opt.sim.empty()) {
         std::fprintf(stderr, "sfd-hil: give exactly one of --log IN.lcmlog and --sim SCENARIO\n");
@@ -579,6 +755,7 @@ int main(int argc, char **argv) {
     std::fflush(stdout);
 
     Publisher pub(tx, cfg.channels, opt);
+    pub.set_resync_messages(cfg.node.time.resync_messages);
     int input_rc = 0;
     long events = 0;
     sfdsim::FlightStats fst;
@@ -617,6 +794,7 @@ int main(int argc, char **argv) {
     const std::vector<Frame> &fr = g.frames;
     const int64_t timeout_ns = opt.timeout_ms * 1000000LL;
     long no_verdict = 0, late = 0, measured = 0, misses = 0, exhausted = 0, timed = 0;
+    long refused_judged = 0;
     long hyp_max = 0;
     double hyp_sum = 0;
     std::vector<double> e2e, node, processing, publishing, lateness, period_err;
@@ -624,6 +802,10 @@ int main(int argc, char **argv) {
         const Frame &f = fr[i];
         const bool got = f.verdict_ns >= 0;
         const bool in_time = got && f.verdict_ns - f.pub_ns <= timeout_ns;
+        if (f.refused) {  // a fault the node must refuse: a verdict for it is the anomaly
+            if (got) ++refused_judged;
+            continue;
+        }
         if (!got) ++no_verdict;
         if (got && !in_time) ++late;
         if (opt.rate > 0) {
@@ -678,7 +860,18 @@ int main(int argc, char **argv) {
                         "(" + std::to_string(g.last_rejected[k]) + ")";
         }
     }
-    const long lost = no_verdict + late + g.unknown_verdicts + node_drops;
+    // Injected faults the node must refuse, and whether every frame is accounted for (counters
+    // since the node started: a fresh node per run).
+    const long restart_refusals = pub.restarts() * (cfg.node.time.resync_messages - 1);
+    const long expected_drops =
+        pub.duplicated() + pub.reordered() + pub.future() + 2 * restart_refusals;
+    const long unexplained_drops = node_drops - expected_drops;
+    const long frame_refusals = static_cast<long>(g.last_frames_refused);
+    const long judged = g.verdicts + g.unknown_verdicts;
+    const long received = static_cast<long>(g.last_frames_in);
+    const bool accounted = received == judged + frame_refusals;
+    const long lost = no_verdict + late + g.unknown_verdicts + std::labs(unexplained_drops) +
+                      refused_judged + (opt.faults.any() && !accounted ? 1 : 0);
     const Stats se = stats_of(e2e), sn = stats_of(node), sl = stats_of(lateness),
                 sp = stats_of(period_err), sc = stats_of(processing), sb = stats_of(publishing);
 
@@ -692,7 +885,23 @@ int main(int argc, char **argv) {
     std::printf("| lost: frames without verdict within %ld ms | %ld (%ld late) |\n", opt.timeout_ms,
                 no_verdict + late, late);
     std::printf("| lost: verdicts for unknown frames | %ld |\n", g.unknown_verdicts);
-    std::printf("| lost: node-side drops (SFD_TIMING rejected[]) | %ld |\n", node_drops);
+    if (opt.faults.any()) {
+        std::printf(
+            "| faults injected | dropped %ld, duplicated %ld, reordered %ld, future-stamped %ld, "
+            "restarts %ld (100 s back), stalls %ld (%ld ms) |\n",
+            pub.dropped(), pub.duplicated(), pub.reordered(), pub.future(), pub.restarts(),
+            pub.stalls(), opt.faults.stall_ms);
+        std::printf(
+            "| frames: copies published / received by the node / judged / refused by the node / "
+            "lost on the transport | %ld / %ld / %ld / %ld / %ld |\n",
+            pub.frame_copies(), received, judged, frame_refusals, pub.frame_copies() - received);
+        std::printf("| every frame received accounted for (judged + refused) | %s |\n",
+                    accounted ? "yes" : "NO");
+        std::printf("| refused frames the node judged anyway | %ld |\n", refused_judged);
+        std::printf("| node-side drops expected from the faults | %ld |\n", expected_drops);
+    }
+    std::printf("| lost: node-side drops (SFD_TIMING rejected[]) | %ld |\n",
+                opt.faults.any() ? unexplained_drops : node_drops);
     std::printf("| node rejected[] during run (since node start) |%s |\n",
                 rej_line.empty() ? " none" : rej_line.c_str());
     if (pub.malformed() > 0 || pub.publish_failures() > 0) {

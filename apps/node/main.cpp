@@ -323,11 +323,12 @@ int main(int argc, char **argv) {
     sfd_node_flush(&g_node);
     const sfd_node_counters_t &c = g_node.pipe.counters;
     std::printf(
-        "sfd-node: stopped: %lld frames in, %lld processed (%lld untested), %lld IMU, "
-        "%lld CAMERA_INFO, %ld publish failures\n",
-        static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_processed),
-        static_cast<long long>(c.frames_untested), static_cast<long long>(c.imu_in),
-        static_cast<long long>(c.camera_info_in), g_app.publish_failures);
+        "sfd-node: stopped: %lld frames in, %lld refused, %lld processed (%lld untested), "
+        "%lld IMU, %lld CAMERA_INFO, %ld publish failures\n",
+        static_cast<long long>(c.frames_in), static_cast<long long>(c.frames_refused),
+        static_cast<long long>(c.frames_processed), static_cast<long long>(c.frames_untested),
+        static_cast<long long>(c.imu_in), static_cast<long long>(c.camera_info_in),
+        g_app.publish_failures);
     std::printf("sfd-node: publish: %ld calls, longest %lld us, %ld over 1 ms\n", g_app.publishes,
                 static_cast<long long>(g_app.publish_max_us), g_app.publish_over_1ms);
     std::printf("sfd-node: rejected:");

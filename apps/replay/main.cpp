@@ -585,6 +585,7 @@ int run(int argc, char **argv) {
                         {"bytes_skipped", static_cast<long long>(in.bytes_skipped)}};
         j["filter_start"] = filter_start;
         j["frames"] = json{{"in", static_cast<long long>(c.frames_in)},
+                           {"refused", static_cast<long long>(c.frames_refused)},
                            {"processed", static_cast<long long>(c.frames_processed)},
                            {"untested", static_cast<long long>(c.frames_untested)}};
         j["rejected"] = rejected;

@@ -230,8 +230,16 @@ static void count_malformed_features(sfd_pipeline_t *p, const sfd_frame_t *frame
     }
 }
 
+static int push_frame(sfd_pipeline_t *p, const sfd_frame_t *frame);
+
 int sfd_pipeline_push_frame(sfd_pipeline_t *p, const sfd_frame_t *frame) {
     if (p == NULL || frame == NULL) return SFD_REJECT_DECODE;
+    const int r = push_frame(p, frame);
+    if (r != SFD_REJECT_NONE) p->counters.frames_refused++;
+    return r;
+}
+
+static int push_frame(sfd_pipeline_t *p, const sfd_frame_t *frame) {
     int r = SFD_REJECT_NONE;
     if (!p->have_camera) {
         r = SFD_REJECT_NO_CAMERA_INFO;

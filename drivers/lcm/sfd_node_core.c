@@ -74,6 +74,7 @@ typedef struct {
 static void fill_counters(const sfd_node_t *n, sfd_timing_t *t) {
     const sfd_pipeline_counters_t *c = &n->pipe.counters;
     t->frames_in = c->frames_in;
+    t->frames_refused = c->frames_refused;
     t->frames_processed = c->frames_processed;
     t->frames_untested = c->frames_untested;
     t->imu_in = c->imu_in;
@@ -215,6 +216,7 @@ static void handle_features(sfd_node_t *n, const void *data, int32_t size) {
     if (r == SFD_REJECT_NONE && cam_id != n->camera_id) r = SFD_REJECT_CAMERA_ID;
     if (r != SFD_REJECT_NONE) {
         sfd_pipeline_count_reject(&n->pipe, r);
+        n->pipe.counters.frames_refused++;
         return;
     }
     if (sfd_pipeline_push_frame(&n->pipe, &n->frame) != SFD_REJECT_NONE) return; /* counted */

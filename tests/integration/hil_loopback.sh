@@ -108,7 +108,7 @@ run_clean() {  # NAME FRAMES RATE [sfd-node options...]
 
 # 1. closed loop
 run_clean rate0 300 0
-grep -q "stopped: 300 frames in, 300 processed" "$SFD_TMP/node_rate0.txt" || {
+grep -q "stopped: 300 frames in, 0 refused, 300 processed" "$SFD_TMP/node_rate0.txt" || {
   cat "$SFD_TMP/node_rate0.txt"; echo "rate 0: the node did not process 300 frames"; exit 1; }
 
 # 2. paced, 4x the recorded pace

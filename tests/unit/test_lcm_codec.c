@@ -583,6 +583,7 @@ static void lcm_node_reports_status_while_no_frame_is_judged(void **state) {
     assert_true(g_last_timing.frames_in >= 30); /* the frames before the 400th input */
     assert_true(g_last_timing.rejected[SFD_TIMING_T_REJECT_NO_CAMERA_INFO] ==
                 g_last_timing.frames_in);
+    assert_true(g_last_timing.frames_refused == g_last_timing.frames_in);
     assert_true(g_last_timing.imu_in + g_last_timing.frames_in ==
                 2 * (int64_t)SFD_NODE_STATUS_EVERY_INPUTS);
     assert_true(g_last_timing.utime > 0);
@@ -596,6 +597,7 @@ static void lcm_node_reports_status_while_no_frame_is_judged(void **state) {
     assert_int_equal(g_frame_timings, 80);
     assert_int_equal(g_last_timing.frame_processed, 1);
     assert_true(g_last_timing.frames_processed == 80);
+    assert_true(g_last_timing.frames_in == g_last_timing.frames_refused + 80);
     assert_true(g_last_timing.camera_info_in == 1);
 }
 

@@ -68,6 +68,9 @@ typedef struct {
 typedef struct {
     int64_t rejected[SFD_REJECT_NUM_REASONS]; /**< by sfd_reject_reason_t */
     int64_t frames_in;                        /**< frames received (the transport counts them) */
+    int64_t frames_refused;                   /**< of those, refused (any reason, the transport's
+                                                   included): frames_in = frames_refused +
+                                                   frames judged + frames held */
     int64_t frames_processed;                 /**< frames that produced a verdict */
     int64_t frames_untested; /**< of those, frames with no tested feature (window filling,
                                   IMU missing) */
