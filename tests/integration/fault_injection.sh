@@ -9,7 +9,8 @@
 #     the node received is judged or refused (frames_in = judged + frames_refused), no refused
 #     frame is judged, every frame that is not a fault has its verdict (frames after the future
 #     stamp and after the restart included), and the node's refusals are exactly the ones the
-#     faults imply: order = duplicates + reordered, time_jump = 1 + 2 (N - 1), restart = 2.
+#     faults imply: order = duplicates + reordered, time_jump = 1 + 2 (N - 1), restart = 2;
+#     the counters sfd-hil read from SFD_TIMING equal the node's stop report.
 #  2. a stalled node (SIGSTOP for 1 s, 200 frames at the recorded pace): every frame received
 #     is accounted for; the frames the kernel dropped while it was stopped (copies published -
 #     frames_in) show in the node's frame_gap counter; the last 40 frames are judged.
@@ -60,7 +61,15 @@ reord=$(echo "$faults" | sed -E 's/.*reordered ([0-9]+).*/\1/')
 [ "$(reason order "$SFD_TMP/node1.txt")" = "$((dup + reord))" ] || fail "order != duplicated + reordered"
 [ "$(reason time_jump "$SFD_TMP/node1.txt")" = "9" ] || fail "time_jump != 1 + 2 x 4"
 [ "$(reason restart "$SFD_TMP/node1.txt")" = "2" ] || fail "restart != 2"
-echo "ok: publisher faults: dropped $dropped, duplicated $dup, reordered $reord; every frame accounted for"
+# sfd-hil's view of the node's counters (from SFD_TIMING) equals the node's own stop report
+compared=0
+for kv in $(field 'node rejected\[\] during run' "$SFD_TMP/faults.txt"); do
+  compared=$((compared + 1))
+  name="${kv%%=*}"; total="$(echo "$kv" | sed -E 's/.*\(([0-9]+)\)/\1/')"
+  [ "$(reason "$name" "$SFD_TMP/node1.txt")" = "$total" ] || fail "$name: sfd-hil saw $total, the node's stop report $(reason "$name" "$SFD_TMP/node1.txt")"
+done
+[ "$compared" -ge 3 ] || fail "sfd-hil's rejected[] row has $compared entries"
+echo "ok: publisher faults: dropped $dropped, duplicated $dup, reordered $reord; every frame accounted for; sfd-hil and the node's stop report agree"
 
 # 2. a stalled node
 "$SFD_BUILD/apps/sfd-node" --lcm-url "$url" > "$SFD_TMP/node2.txt" 2>&1 &
