@@ -325,7 +325,8 @@ std::string file_error(const std::string &body, AppConfig *out = nullptr) {
     return err;
 }
 
-// GIVEN the shipped apps/config/sfd.yaml THEN it loads, validates and starts a node.
+// GIVEN the shipped apps/config/sfd.yaml THEN it loads, validates, states the defaults and starts
+// a node.
 void shipped_config_is_valid(void **) {
     const std::string &path = g_shipped_yaml;
     AppConfig cfg;
@@ -333,6 +334,17 @@ void shipped_config_is_valid(void **) {
     if (!sfdapp::load_config(path, &cfg, &err)) fail_msg("%s", err.c_str());
     if (!sfdapp::validate(cfg, &err)) fail_msg("%s", err.c_str());
     assert_int_equal(sfd_node_init(&g_node, &cfg.node, no_publish, nullptr, nullptr), SFD_OK);
+    // "a missing key keeps the default shown here": the file states the defaults exactly
+    const AppConfig def;
+    assert_memory_equal(&cfg.node, &def.node, sizeof cfg.node);
+    expect_equal(cfg.method, def.method, "method");
+    expect_equal(cfg.lcm_url, def.lcm_url, "lcm_url");
+    expect_equal(
+        cfg.channels.imu + cfg.channels.camera_info + cfg.channels.features + cfg.channels.verdict +
+            cfg.channels.timing + cfg.channels.state + cfg.channels.truth,
+        def.channels.imu + def.channels.camera_info + def.channels.features + def.channels.verdict +
+            def.channels.timing + def.channels.state + def.channels.truth,
+        "channels");
     expect_equal(cfg.origin_of("filter.gravity_m_s2"), path, "origin of a key of the file");
     expect_equal(cfg.origin_of("gyro_bias_rad_s[1]"), path, "origin of a list element");
 }
