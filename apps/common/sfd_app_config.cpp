@@ -345,7 +345,7 @@ class Reader {
 
 }  // namespace
 
-bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
+bool read_config(const std::string &path, AppConfig *cfg, std::string *error) {
     // Checked here first: cv::FileStorage would log its own line on stderr besides the reason.
     struct stat st;
     if (stat(path.c_str(), &st) != 0) {
@@ -724,6 +724,10 @@ bool validate(const AppConfig &cfg, std::string *error) {
         return false;
     }
     return true;
+}
+
+bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
+    return read_config(path, cfg, error) && validate(*cfg, error);
 }
 
 bool parse_int_option(const char *option, const char *text, int *out, std::string *error) {

@@ -40,8 +40,12 @@ struct AppConfig {
 /// Reads `path` into `cfg` (keys absent from the file keep their values) and records `path` as
 /// the origin of every key it sets. Checks syntax, key names and types only (an integer key
 /// holds an integer within 32 bits, written in decimal; a number key a number; a microsecond
-/// key a whole number); the ranges are validate()'s. On failure returns false with a one-line
+/// key a whole number); the ranges are validate()'s, to be called once the command-line
+/// overrides are applied (sfd-node, sfd-replay). On failure returns false with a one-line
 /// reason "PATH: KEY: VALUE is not ...".
+bool read_config(const std::string &path, AppConfig *cfg, std::string *error);
+
+/// read_config() then validate(), for a tool that overrides no key of the file (sfd-hil).
 bool load_config(const std::string &path, AppConfig *cfg, std::string *error);
 
 /// Sets the method by name; false with the reason "not one of none, parity, ..." for others.

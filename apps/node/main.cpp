@@ -211,7 +211,7 @@ int main(int argc_in, char **argv_in) {
     // (sfdapp::validate, the same as sfd-replay's): any bad key is exit 2 before LCM starts.
     for (int i = 1; i + 1 < argc; ++i) {
         if (!std::strcmp(argv[i], "--config")) {
-            if (!sfdapp::load_config(argv[i + 1], &cfg, &err)) {
+            if (!sfdapp::read_config(argv[i + 1], &cfg, &err)) {
                 std::fprintf(stderr, "sfd-node: %s\n", err.c_str());
                 return 2;
             }

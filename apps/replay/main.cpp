@@ -292,7 +292,7 @@ int run(int argc_in, char **argv_in) {
     // (sfdapp::validate, the same as sfd-node's).
     for (int i = 1; i + 1 < argc; ++i) {
         if (!std::strcmp(argv[i], "--config") &&
-            !sfdapp::load_config(argv[i + 1], &app_cfg, &err)) {
+            !sfdapp::read_config(argv[i + 1], &app_cfg, &err)) {
             std::fprintf(stderr, "sfd-replay: %s\n", err.c_str());
             return 2;
         }

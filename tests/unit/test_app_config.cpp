@@ -5,7 +5,7 @@
 //    out of range, not 0/1) with "ORIGIN: KEY: VALUE is not ...", naming that key only;
 //  - every configuration it accepts (the boundaries of every range) is accepted by
 //    sfd_node_init(), so the node cannot fail on a configuration validate() passed;
-//  - load_config() refuses wrong types, non-integers, integers beyond 32 bits (which
+//  - read_config() refuses wrong types, non-integers, integers beyond 32 bits (which
 //    cv::FileStorage would wrap), octal and hexadecimal literals and unknown keys, naming the
 //    file, the key and the value; ranges are judged after the command-line overrides;
 //  - the command-line numbers are parsed whole ("--window 2.5: not an integer").
@@ -296,7 +296,7 @@ void accepted_configurations_start_a_node(void **) {
     }
 }
 
-// ---- load_config(): the file ------------------------------------------------------------------
+// ---- read_config(): the file ------------------------------------------------------------------
 
 // Writes a YAML file with `body` under the header and returns its path.
 std::string write_yaml(const std::string &body) {
@@ -309,13 +309,13 @@ std::string write_yaml(const std::string &body) {
     return path;
 }
 
-// load_config() then validate() on a file with `body`: "" when both accept it, else the error
+// read_config() then validate() on a file with `body`: "" when both accept it, else the error
 // with the file's path replaced by "F".
 std::string file_error(const std::string &body, AppConfig *out = nullptr) {
     const std::string path = write_yaml(body);
     AppConfig cfg;
     std::string err;
-    const bool ok = sfdapp::load_config(path, &cfg, &err) && sfdapp::validate(cfg, &err);
+    const bool ok = sfdapp::read_config(path, &cfg, &err) && sfdapp::validate(cfg, &err);
     std::remove(path.c_str());
     if (out != nullptr) *out = cfg;
     if (ok) return "";
@@ -331,7 +331,7 @@ void shipped_config_is_valid(void **) {
     const std::string &path = g_shipped_yaml;
     AppConfig cfg;
     std::string err;
-    if (!sfdapp::load_config(path, &cfg, &err)) fail_msg("%s", err.c_str());
+    if (!sfdapp::read_config(path, &cfg, &err)) fail_msg("%s", err.c_str());
     if (!sfdapp::validate(cfg, &err)) fail_msg("%s", err.c_str());
     assert_int_equal(sfd_node_init(&g_node, &cfg.node, no_publish, nullptr, nullptr), SFD_OK);
     // "a missing key keeps the default shown here": the file states the defaults exactly
@@ -452,13 +452,27 @@ void file_values_are_named(void **) {
     // a missing file and a file that is not YAML
     AppConfig c2;
     std::string err;
-    assert_false(sfdapp::load_config("/nonexistent/sfd.yaml", &c2, &err));
+    assert_false(sfdapp::read_config("/nonexistent/sfd.yaml", &c2, &err));
     expect_equal(err, "/nonexistent/sfd.yaml: cannot open (No such file or directory)",
                  "missing file");
-    assert_false(sfdapp::load_config("/tmp", &c2, &err));
+    assert_false(sfdapp::read_config("/tmp", &c2, &err));
     expect_equal(err, "/tmp: not a regular file", "a directory");
     expect_equal(file_error("seed: 1\ngyro_bias_rad_s: [ 1"),
                  "F:4: not valid YAML (Missing , between the elements)", "not YAML");
+}
+
+// GIVEN load_config() (read_config() then validate(), for sfd-hil, which overrides no key) THEN
+// a range error of the file is refused with the same message.
+void load_config_validates(void **) {
+    const std::string path = write_yaml("filter:\n   gravity_m_s2: -9.81");
+    AppConfig cfg;
+    std::string err;
+    assert_true(sfdapp::read_config(path, &cfg, &err));
+    assert_false(sfdapp::load_config(path, &cfg, &err));
+    std::remove(path.c_str());
+    expect_equal(err, path + ": filter.gravity_m_s2: -9.81 is not > 0", "load_config");
+    AppConfig shipped;
+    assert_true(sfdapp::load_config(g_shipped_yaml, &shipped, &err));
 }
 
 // GIVEN a bad value in the file and a good one on the command line (or the reverse) THEN the
@@ -554,6 +568,7 @@ int main(int argc, char **argv) {
         cmocka_unit_test(only_the_bad_key_is_named),
         cmocka_unit_test(accepted_configurations_start_a_node),
         cmocka_unit_test(file_values_are_named),
+        cmocka_unit_test(load_config_validates),
         cmocka_unit_test(overrides_are_validated_after_the_file),
         cmocka_unit_test(command_line_numbers_are_parsed_whole),
         cmocka_unit_test(options_with_equals_are_split),
