@@ -2,10 +2,19 @@
 #include "sfd_app_config.hpp"
 
 #include <opencv2/core.hpp>
+#include <sys/stat.h>
 
+#include <cctype>
 #include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <limits>
 #include <set>
+#include <sstream>
 
 namespace sfdapp {
 
@@ -13,60 +22,344 @@ AppConfig::AppConfig() {
     sfd_node_config_default(&node);
 }
 
-bool set_method(const std::string &name, AppConfig *cfg, std::string *error) {
-    if (name == "none") {
-        cfg->node.params.method = SFD_METHOD_NONE;
-    } else if (name == "parity") {
-        cfg->node.params.method = SFD_METHOD_PARITY;
-    } else if (name == "oprf") {
-        cfg->node.params.method = SFD_METHOD_OPRF;
-    } else if (name == "ransac1") {
-        cfg->node.params.method = SFD_METHOD_RANSAC1;
-    } else if (name == "ransacf") {
-        cfg->node.params.method = SFD_METHOD_RANSACF;
-    } else if (name == "both") {
-        cfg->node.params.method = SFD_METHOD_BOTH;
-    } else {
-        *error = "unknown method " + name + " (none, parity, oprf, ransac1, ransacf, both)";
-        return false;
-    }
-    cfg->method = name;
-    return true;
+std::string AppConfig::origin_of(const std::string &key) const {
+    const auto it = origin.find(key.substr(0, key.find('[')));
+    return it == origin.end() ? std::string("default") : it->second;
 }
 
 namespace {
 
-bool read_number(const cv::FileNode &n, const std::string &where, double *out, std::string *err) {
-    if (!n.isReal() && !n.isInt()) {
-        *err = where + ": expected a number";
-        return false;
-    }
-    *out = static_cast<double>(n);
-    return true;
-}
+// The method names in sfd_method_t order (SFD_METHOD_NONE = 0 ... SFD_METHOD_BOTH = 5).
+constexpr const char *kMethods[] = {"none", "parity", "oprf", "ransac1", "ransacf", "both"};
+constexpr int kNumMethods = static_cast<int>(sizeof kMethods / sizeof kMethods[0]);
+const char *const kMethodList = "none, parity, oprf, ransac1, ransacf, both";
 
-bool read_int(const cv::FileNode &n, const std::string &where, int *out, std::string *err) {
-    if (!n.isInt()) {
-        *err = where + ": expected an integer";
-        return false;
-    }
-    *out = static_cast<int>(n);
-    return true;
-}
+// Largest |value| of a microsecond key (an int64 with room to add two of them).
+constexpr double kMaxMicros = 9.0e15;
 
-bool read_string(const cv::FileNode &n, const std::string &where, std::string *out,
-                 std::string *err) {
-    if (!n.isString()) {
-        *err = where + ": expected a string";
-        return false;
-    }
-    *out = static_cast<std::string>(n);
-    return true;
+std::string quoted(const std::string &s) {
+    return "\"" + s + "\"";
 }
 
 }  // namespace
 
-bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
+std::string format_double(double v, bool mark_real) {
+    if (std::isnan(v)) return "nan";
+    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+    char buf[40];
+    if (v == std::floor(v) && std::fabs(v) < 1e16) {
+        std::snprintf(buf, sizeof buf, mark_real ? "%.1f" : "%.0f", v);
+        return buf;
+    }
+    for (int prec = 1; prec <= 17; ++prec) {
+        std::snprintf(buf, sizeof buf, "%.*g", prec, v);
+        if (std::strtod(buf, nullptr) == v) break;
+    }
+    std::string s(buf);
+    if (mark_real && s.find_first_of(".e") == std::string::npos) s += ".0";
+    return s;
+}
+
+bool set_method(const std::string &name, AppConfig *cfg, std::string *error) {
+    for (int m = 0; m < kNumMethods; ++m) {
+        if (name == kMethods[m]) {
+            cfg->node.params.method = m;
+            cfg->method = name;
+            return true;
+        }
+    }
+    *error = std::string("not one of ") + kMethodList;
+    return false;
+}
+
+namespace {
+
+// ---- the file's integer literals -------------------------------------------------------------
+
+std::string trim(const std::string &s) {
+    const size_t b = s.find_first_not_of(" \t\r");
+    if (b == std::string::npos) return "";
+    const size_t e = s.find_last_not_of(" \t\r");
+    return s.substr(b, e - b + 1);
+}
+
+// The line without its comment ('#' at the start or after a blank, outside quotes).
+std::string strip_comment(const std::string &line) {
+    char quote = 0;
+    for (size_t i = 0; i < line.size(); ++i) {
+        const char c = line[i];
+        if (quote != 0) {
+            if (c == quote) quote = 0;
+        } else if (c == '"' || c == '\'') {
+            quote = c;
+        } else if (c == '#' && (i == 0 || line[i - 1] == ' ' || line[i - 1] == '\t')) {
+            return line.substr(0, i);
+        }
+    }
+    return line;
+}
+
+// Position of the ':' that ends a mapping key (followed by a blank or the end), outside quotes.
+size_t key_colon(const std::string &s) {
+    char quote = 0;
+    for (size_t i = 0; i < s.size(); ++i) {
+        const char c = s[i];
+        if (quote != 0) {
+            if (c == quote) quote = 0;
+        } else if (c == '"' || c == '\'') {
+            quote = c;
+        } else if (c == ':' && (i + 1 == s.size() || s[i + 1] == ' ' || s[i + 1] == '\t')) {
+            return i;
+        } else if (c == '[' || c == '{') {
+            return std::string::npos;  // a flow collection, not a key
+        }
+    }
+    return std::string::npos;
+}
+
+bool is_digit(char c) {
+    return std::isdigit(static_cast<unsigned char>(c)) != 0;
+}
+
+// One plain scalar. cv::FileStorage reads an integer literal with (int)strtol(text, 0, 0): a value
+// beyond 32 bits wraps silently (123456789012 -> -1097262572, 4294967297 -> 1), a leading 0 is
+// octal (010 -> 8) and 0x hexadecimal. Such literals are refused here, before they are read.
+bool check_literal(const std::string &tok, const std::string &where, std::string *error) {
+    size_t i = (!tok.empty() && (tok[0] == '+' || tok[0] == '-')) ? 1 : 0;
+    if (i >= tok.size() || !is_digit(tok[i])) return true;  // not a number literal
+    size_t j = i;
+    while (j < tok.size() && is_digit(tok[j])) ++j;
+    if (j < tok.size()) {
+        const char c = tok[j];
+        if (c == '.' || c == 'e' || c == 'E') return true;  // a real: strtod
+        if (tok[i] == '0') {
+            *error = where + ": " + tok + " is not a decimal number";
+            return false;
+        }
+        return true;  // cv::FileStorage's own error
+    }
+    if (j - i > 1 && tok[i] == '0') {
+        *error = where + ": " + tok + " has a leading 0 (cv::FileStorage would read it as octal)";
+        return false;
+    }
+    errno = 0;
+    const long long v = std::strtoll(tok.c_str(), nullptr, 10);
+    if (errno == ERANGE || v < std::numeric_limits<int32_t>::min() ||
+        v > std::numeric_limits<int32_t>::max()) {
+        *error = where + ": " + tok + " is outside the 32-bit integer range";
+        return false;
+    }
+    return true;
+}
+
+// A scalar's text (quoted strings and nested collections are not number literals).
+bool check_scalar(const std::string &text, const std::string &where, std::string *error) {
+    const std::string v = trim(text);
+    if (v.empty() || v[0] == '"' || v[0] == '\'' || v[0] == '[' || v[0] == '{') return true;
+    return check_literal(v, where, error);
+}
+
+// The value text of `key` (after "key:" or "- "): a scalar, or a flow list or map of scalars.
+bool check_value(const std::string &value, const std::string &key, const std::string &path,
+                 std::string *error) {
+    const std::string v = trim(value);
+    if (v.empty() || (v[0] != '[' && v[0] != '{')) return check_scalar(v, path + ": " + key, error);
+    const bool map = v[0] == '{';
+    std::string inner = v.substr(1);
+    const size_t close = inner.find_last_of(map ? '}' : ']');
+    if (close != std::string::npos) inner.resize(close);
+    std::stringstream ss(inner);
+    std::string item;
+    int k = 0;
+    while (std::getline(ss, item, ',')) {
+        std::string sub = key + "[" + std::to_string(k++) + "]";
+        std::string text = trim(item);
+        if (map) {
+            const size_t c = key_colon(text);
+            if (c == std::string::npos) continue;
+            sub = key + "." + trim(text.substr(0, c));
+            text = text.substr(c + 1);
+        }
+        std::string where = path;
+        where.append(": ").append(sub);
+        if (!check_scalar(text, where, error)) return false;
+    }
+    return true;
+}
+
+// Scans the text of the file for the integer literals cv::FileStorage would misread (see
+// check_literal), naming the key: "PATH: filter.window_size: 010 has a leading 0 ...". Keys are
+// tracked by indentation (a top-level key and the keys under it, as in apps/config/sfd.yaml).
+bool check_integer_literals(const std::string &path, std::string *error) {
+    std::ifstream in(path);
+    std::string line, top, last;
+    while (std::getline(in, line)) {
+        const std::string s = strip_comment(line);
+        const size_t indent = s.find_first_not_of(" \t");
+        if (indent == std::string::npos) continue;
+        std::string body = trim(s.substr(indent));
+        if (body.empty() || body[0] == '%' || body.rfind("---", 0) == 0 ||
+            body.rfind("...", 0) == 0) {
+            continue;
+        }
+        std::string key = last;
+        if (body[0] == '-' && (body.size() == 1 || body[1] == ' ')) {
+            body = body.substr(1);  // an element of a block list: of the last key
+        } else {
+            const size_t c = key_colon(body);
+            if (c == std::string::npos) {
+                if (!check_value(body, last, path, error)) return false;  // a continued value
+                continue;
+            }
+            key = trim(body.substr(0, c));
+            if (key.size() >= 2 && (key[0] == '"' || key[0] == '\'')) {
+                key = key.substr(1, key.size() - 2);
+            }
+            if (indent == 0) {
+                top = key;
+            } else if (!top.empty()) {
+                key.insert(0, ".").insert(0, top);
+            }
+            last = key;
+            body = body.substr(c + 1);
+        }
+        if (!check_value(body, key, path, error)) return false;
+    }
+    return true;
+}
+
+// ---- reading the keys ---------------------------------------------------------------------------
+
+// A scalar node's value as the error messages show it.
+std::string describe_scalar(const cv::FileNode &n) {
+    if (n.isInt()) return std::to_string(static_cast<int>(n));
+    if (n.isReal()) return format_double(static_cast<double>(n), true);
+    if (n.isString()) return quoted(static_cast<std::string>(n));
+    if (n.isSeq()) return "a list";
+    if (n.isMap()) return "a map";
+    return "an empty value";
+}
+
+// A node's value as the error messages show it (a list with its first elements).
+std::string describe(const cv::FileNode &n) {
+    if (!n.isSeq()) return describe_scalar(n);
+    std::string s = "[";
+    for (size_t k = 0; k < n.size(); ++k) {
+        if (k > 0) s += ", ";
+        if (k == 8) {
+            s += "...";
+            break;
+        }
+        s += describe_scalar(n[static_cast<int>(k)]);
+    }
+    return s + "]";
+}
+
+// Reads keys of the file at `path` into `cfg`, recording `path` as their origin; the first
+// failure sets "PATH: KEY: VALUE is not ..." and returns false.
+class Reader {
+  public:
+    Reader(const std::string &path, AppConfig *cfg, std::string *error)
+        : path_(path), cfg_(cfg), error_(error) {}
+
+    bool fail(const std::string &key, const cv::FileNode &n, const std::string &why) {
+        *error_ = path_ + ": " + key + ": " + describe(n) + " " + why;
+        return false;
+    }
+    bool fail_text(const std::string &key, const std::string &why) {
+        *error_ = path_ + ": " + key + ": " + why;
+        return false;
+    }
+    void set(const std::string &key) { cfg_->origin[key.substr(0, key.find('['))] = path_; }
+
+    bool number(const cv::FileNode &n, const std::string &key, double *out) {
+        if (!n.isReal() && !n.isInt()) return fail(key, n, "is not a number");
+        *out = static_cast<double>(n);
+        set(key);
+        return true;
+    }
+    template <typename Int>
+    bool integer(const cv::FileNode &n, const std::string &key, Int *out) {
+        if (!n.isInt()) return fail(key, n, "is not an integer");
+        *out = static_cast<Int>(static_cast<int>(n));
+        set(key);
+        return true;
+    }
+    bool string(const cv::FileNode &n, const std::string &key, std::string *out) {
+        if (!n.isString()) return fail(key, n, "is not a string");
+        *out = static_cast<std::string>(n);
+        set(key);
+        return true;
+    }
+    // Microseconds: an integer, or a real with a whole value (5e9 is beyond 32-bit integers).
+    bool micros(const cv::FileNode &n, const std::string &key, int64_t *out) {
+        double d = 0.0;
+        if (!number(n, key, &d)) return false;
+        if (!std::isfinite(d) || d != std::floor(d)) {
+            return fail(key, n, "is not a whole number of microseconds");
+        }
+        if (!(std::fabs(d) <= kMaxMicros)) return fail(key, n, "is beyond 9e15 microseconds");
+        *out = static_cast<int64_t>(d);
+        return true;
+    }
+    bool vec3(const cv::FileNode &n, const std::string &key, double out[3]) {
+        if (!n.isSeq() || n.size() != 3) return fail(key, n, "is not a list of 3 numbers");
+        double v[3];
+        for (int k = 0; k < 3; ++k) {
+            if (!number(n[k], key + "[" + std::to_string(k) + "]", &v[k])) return false;
+        }
+        for (int k = 0; k < 3; ++k) out[k] = v[k];
+        set(key);
+        return true;
+    }
+    // An unsigned integer: a non-negative integer, or a whole real up to 2^53.
+    bool unsigned_integer(const cv::FileNode &n, const std::string &key, uint64_t *out) {
+        double d = 0.0;
+        if (!n.isInt() && !n.isReal()) return fail(key, n, "is not an unsigned integer");
+        d = static_cast<double>(n);
+        if (!(d >= 0.0 && d <= 9007199254740992.0) || d != std::floor(d)) {
+            return fail(key, n, "is not an unsigned integer (0..2^53)");
+        }
+        *out = static_cast<uint64_t>(d);
+        set(key);
+        return true;
+    }
+    // Refuses keys of `map` that are not in `known` (prefix: "filter." for the sub-maps).
+    bool only_known(const cv::FileNode &map, const std::set<std::string> &known,
+                    const std::string &prefix) {
+        for (const std::string &key : map.keys()) {
+            if (known.count(key) == 0) {
+                *error_ = path_;
+                error_->append(": unknown key ").append(prefix).append(key);
+                return false;
+            }
+        }
+        return true;
+    }
+
+  private:
+    const std::string &path_;
+    AppConfig *cfg_;
+    std::string *error_;
+};
+
+}  // namespace
+
+bool read_config(const std::string &path, AppConfig *cfg, std::string *error) {
+    // Checked here first: cv::FileStorage would log its own line on stderr besides the reason.
+    struct stat st;
+    if (stat(path.c_str(), &st) != 0) {
+        *error = path + ": cannot open (" + std::strerror(errno) + ")";
+        return false;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        *error = path + ": not a regular file";
+        return false;
+    }
+    if (!std::ifstream(path).is_open()) {
+        *error = path + ": cannot open for reading";
+        return false;
+    }
     cv::FileStorage fs;
     try {
         if (!fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML)) {
@@ -74,7 +367,15 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
             return false;
         }
     } catch (const cv::Exception &e) {
-        *error = path + ": not valid YAML (" + e.msg + ")";
+        // OpenCV 4 puts "PATH(LINE): reason" of a parse error in e.func (and the parser's name
+        // in e.err): "PATH:LINE: not valid YAML (reason)", else its whole message.
+        const size_t close = e.func.find("): ");
+        if (e.func.rfind(path + "(", 0) == 0 && close != std::string::npos) {
+            *error = path + ":" + e.func.substr(path.size() + 1, close - path.size() - 1) +
+                     ": not valid YAML (" + e.func.substr(close + 3) + ")";
+        } else {
+            *error = path + ": not valid YAML (" + e.msg + ")";
+        }
         return false;
     }
     const cv::FileNode root = fs.root();
@@ -82,6 +383,7 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
         *error = path + ": top level is not a map";
         return false;
     }
+    Reader rd(path, cfg, error);
     static const std::set<std::string> known = {"method",
                                                 "false_alarm_rate",
                                                 "pixel_sigma_px",
@@ -104,24 +406,13 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
                                                 "ransac_confidence",
                                                 "seed",
                                                 "filter"};
-    for (const std::string &key : root.keys()) {
-        if (known.count(key) == 0) {
-            *error = path;
-            error->append(": unknown key ").append(key);
-            return false;
-        }
-    }
+    if (!rd.only_known(root, known, "")) return false;
+    if (!check_integer_literals(path, error)) return false;
     sfd_params_t &p = cfg->node.params;
-    auto where = [&](const std::string &key) { return path + ": " + key; };
-    double d = 0;
-    int i = 0;
-    std::string s;
     if (!root["method"].empty()) {
-        if (!read_string(root["method"], where("method"), &s, error)) return false;
-        if (!set_method(s, cfg, error)) {
-            *error = where("method") + ": " + *error;
-            return false;
-        }
+        std::string s;
+        if (!rd.string(root["method"], "method", &s)) return false;
+        if (!set_method(s, cfg, error)) return rd.fail("method", root["method"], "is " + *error);
     }
     struct NumKey {
         const char *name;
@@ -132,9 +423,7 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
                 {"default_depth_var_m2", &p.default_depth_var_m2},
                 {"ransac_confidence", &p.ransac_confidence}};
     for (const NumKey &k : nums) {
-        if (root[k.name].empty()) continue;
-        if (!read_number(root[k.name], where(k.name), &d, error)) return false;
-        *k.dst = d;
+        if (!root[k.name].empty() && !rd.number(root[k.name], k.name, k.dst)) return false;
     }
     struct IntKey {
         const char *name;
@@ -144,67 +433,41 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
                 {"translation_known", &p.translation_known},
                 {"exact_depth_covariance", &p.exact_depth_covariance},
                 {"parity_isolation", &p.parity_isolation},
-                {"max_hypotheses", &p.max_hypotheses},
-                {"publish_timing", &cfg->node.publish_timing}};
+                {"max_hypotheses", &p.max_hypotheses}};
     for (const IntKey &k : ints) {
-        if (root[k.name].empty()) continue;
-        if (!read_int(root[k.name], where(k.name), &i, error)) return false;
-        *k.dst = i;
+        if (!root[k.name].empty() && !rd.integer(root[k.name], k.name, k.dst)) return false;
     }
-    if (!root["camera_id"].empty()) {
-        if (!read_int(root["camera_id"], where("camera_id"), &i, error)) return false;
-        cfg->node.camera_id = i;
+    if (!root["publish_timing"].empty() &&
+        !rd.integer(root["publish_timing"], "publish_timing", &cfg->node.publish_timing)) {
+        return false;
     }
-    if (!root["max_imu_gap_us"].empty()) {
-        if (!read_number(root["max_imu_gap_us"], where("max_imu_gap_us"), &d, error)) return false;
-        p.max_imu_gap_us = static_cast<int64_t>(d);
+    if (!root["camera_id"].empty() &&
+        !rd.integer(root["camera_id"], "camera_id", &cfg->node.camera_id)) {
+        return false;
     }
-    if (!root["time_horizon_us"].empty()) {
-        if (!read_number(root["time_horizon_us"], where("time_horizon_us"), &d, error))
-            return false;
-        if (!(d > 0.0 && d <= 9.0e15) || d != static_cast<double>(static_cast<int64_t>(d))) {
-            *error = where("time_horizon_us") + ": " + std::to_string(d) +
-                     " is not a whole number of microseconds > 0";
-            return false;
-        }
-        cfg->node.time.horizon_us = static_cast<int64_t>(d);
+    if (!root["max_imu_gap_us"].empty() &&
+        !rd.micros(root["max_imu_gap_us"], "max_imu_gap_us", &p.max_imu_gap_us)) {
+        return false;
     }
-    if (!root["time_resync_messages"].empty()) {
-        if (!read_int(root["time_resync_messages"], where("time_resync_messages"), &i, error)) {
-            return false;
-        }
-        if (i < 2 || i > 1000) {
-            *error =
-                where("time_resync_messages") + ": " + std::to_string(i) + " is not in 2..1000";
-            return false;
-        }
-        cfg->node.time.resync_messages = i;
+    if (!root["time_horizon_us"].empty() &&
+        !rd.micros(root["time_horizon_us"], "time_horizon_us", &cfg->node.time.horizon_us)) {
+        return false;
     }
-    const cv::FileNode bias = root["gyro_bias_rad_s"];
-    if (!bias.empty()) {
-        if (!bias.isSeq() || bias.size() != 3) {
-            *error = where("gyro_bias_rad_s") + ": expected a list of 3 numbers";
-            return false;
-        }
-        for (int k = 0; k < 3; ++k) {
-            if (!read_number(bias[k], where("gyro_bias_rad_s"), &d, error)) return false;
-            p.gyro_bias_rad_s[k] = d;
-        }
+    if (!root["time_resync_messages"].empty() &&
+        !rd.integer(root["time_resync_messages"], "time_resync_messages",
+                    &cfg->node.time.resync_messages)) {
+        return false;
     }
-    if (!root["seed"].empty()) {
-        if (!read_int(root["seed"], where("seed"), &i, error)) return false;
-        if (i < 0) {
-            *error = where("seed") + ": expected a non-negative integer";
-            return false;
-        }
-        p.seed = static_cast<uint64_t>(i);
+    if (!root["gyro_bias_rad_s"].empty() &&
+        !rd.vec3(root["gyro_bias_rad_s"], "gyro_bias_rad_s", p.gyro_bias_rad_s)) {
+        return false;
+    }
+    if (!root["seed"].empty() && !rd.unsigned_integer(root["seed"], "seed", &p.seed)) {
+        return false;
     }
     const cv::FileNode flt = root["filter"];
     if (!flt.empty()) {
-        if (!flt.isMap()) {
-            *error = where("filter") + ": expected a map";
-            return false;
-        }
+        if (!flt.isMap()) return rd.fail("filter", flt, "is not a map");
         sfd_nav_config_t &nv = cfg->node.nav;
         struct FKey {
             const char *name;
@@ -220,94 +483,296 @@ bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
                      {"landmark_gate_alpha", &nv.landmark_gate_alpha},
                      {"min_parallax_px", &nv.min_parallax_px},
                      {"window_gate_alpha", &nv.window_gate_alpha}};
-        const char *fints[] = {"enabled",           "gyro_bias_at_rest", "init_from_truth",
-                               "consider_position", "window_filter",     "window_size",
-                               "first_estimates"};
-        int32_t *fint_dst[] = {&nv.enabled,           &nv.gyro_bias_at_rest, &nv.init_from_truth,
-                               &nv.consider_position, &nv.window_filter,     &nv.window_size,
-                               &nv.first_estimates};
-        constexpr int kNumFints = static_cast<int>(sizeof fints / sizeof fints[0]);
-        for (const std::string &key : flt.keys()) {
-            bool found = key == "init_accel_bias_m_s2";
-            for (const FKey &k : fnums) found = found || key == k.name;
-            for (const char *k : fints) found = found || key == k;
-            if (!found) {
-                *error = where("filter");
-                error->append(": unknown key ").append(key);
-                return false;
-            }
-        }
+        struct FInt {
+            const char *name;
+            int32_t *dst;
+        } fints[] = {{"enabled", &nv.enabled},
+                     {"gyro_bias_at_rest", &nv.gyro_bias_at_rest},
+                     {"init_from_truth", &nv.init_from_truth},
+                     {"consider_position", &nv.consider_position},
+                     {"window_filter", &nv.window_filter},
+                     {"window_size", &nv.window_size},
+                     {"first_estimates", &nv.first_estimates}};
+        std::set<std::string> fknown = {"init_accel_bias_m_s2"};
+        for (const FKey &k : fnums) fknown.insert(k.name);
+        for (const FInt &k : fints) fknown.insert(k.name);
+        if (!rd.only_known(flt, fknown, "filter.")) return false;
         for (const FKey &k : fnums) {
-            if (flt[k.name].empty()) continue;
-            if (!read_number(flt[k.name], where(std::string("filter.") + k.name), &d, error)) {
+            if (!flt[k.name].empty() &&
+                !rd.number(flt[k.name], std::string("filter.") + k.name, k.dst)) {
                 return false;
-            }
-            *k.dst = d;
-        }
-        const cv::FileNode ab = flt["init_accel_bias_m_s2"];
-        if (!ab.empty()) {
-            const std::string w = where("filter.init_accel_bias_m_s2");
-            if (!ab.isSeq() || ab.size() != 3) {
-                *error = w + ": expected a list of 3 numbers";
-                return false;
-            }
-            for (int k = 0; k < 3; ++k) {
-                if (!read_number(ab[k], w, &d, error)) return false;
-                nv.init_accel_bias_m_s2[k] = d;
             }
         }
-        for (int k = 0; k < kNumFints; ++k) {
-            if (flt[fints[k]].empty()) continue;
-            if (!read_int(flt[fints[k]], where(std::string("filter.") + fints[k]), &i, error)) {
+        if (!flt["init_accel_bias_m_s2"].empty() &&
+            !rd.vec3(flt["init_accel_bias_m_s2"], "filter.init_accel_bias_m_s2",
+                     nv.init_accel_bias_m_s2)) {
+            return false;
+        }
+        for (const FInt &k : fints) {
+            if (!flt[k.name].empty() &&
+                !rd.integer(flt[k.name], std::string("filter.") + k.name, k.dst)) {
                 return false;
             }
-            *fint_dst[k] = i;
         }
     }
-    if (!root["lcm_url"].empty() &&
-        !read_string(root["lcm_url"], where("lcm_url"), &cfg->lcm_url, error)) {
+    if (!root["lcm_url"].empty() && !rd.string(root["lcm_url"], "lcm_url", &cfg->lcm_url)) {
         return false;
     }
     const cv::FileNode ch = root["channels"];
     if (!ch.empty()) {
-        if (!ch.isMap()) {
-            *error = where("channels") + ": expected a map";
-            return false;
-        }
+        if (!ch.isMap()) return rd.fail("channels", ch, "is not a map");
         std::string *dst[] = {&cfg->channels.imu,      &cfg->channels.camera_info,
                               &cfg->channels.features, &cfg->channels.verdict,
                               &cfg->channels.timing,   &cfg->channels.state,
                               &cfg->channels.truth};
         const char *names[] = {"imu",    "camera_info", "features", "verdict",
                                "timing", "state",       "truth"};
-        for (const std::string &key : ch.keys()) {
-            bool found = false;
-            for (int k = 0; k < 7; ++k) found = found || key == names[k];
-            if (!found) {
-                *error = where("channels");
-                error->append(": unknown key ").append(key);
-                return false;
-            }
+        if (!rd.only_known(ch, std::set<std::string>(std::begin(names), std::end(names)),
+                           "channels.")) {
+            return false;
         }
         for (int k = 0; k < 7; ++k) {
-            if (ch[names[k]].empty()) continue;
-            if (!read_string(ch[names[k]], where(std::string("channels.") + names[k]), dst[k],
-                             error)) {
+            if (!ch[names[k]].empty() &&
+                !rd.string(ch[names[k]], std::string("channels.") + names[k], dst[k])) {
                 return false;
             }
         }
     }
-    return validate(*cfg, error) || (*error = path + ": " + *error, false);
+    return true;
 }
 
+// ---- validation -------------------------------------------------------------------------------
+
+namespace {
+
+std::string bound(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return buf;
+}
+
+// The checks of validate(): the first failure names the key's origin, the key and its value.
+class Checker {
+  public:
+    Checker(const AppConfig &cfg, std::string *error) : cfg_(cfg), error_(error) {}
+    bool failed() const { return failed_; }
+
+    void fail(const std::string &key, const std::string &value, const std::string &why) {
+        if (failed_) return;
+        failed_ = true;
+        *error_ = cfg_.origin_of(key) + ": " + key + ": " + value + " " + why;
+    }
+    void flag(const std::string &key, long long v) {
+        if (v != 0 && v != 1) fail(key, std::to_string(v), "is not 0 or 1");
+    }
+    void integer(const std::string &key, long long v, long long lo, long long hi) {
+        if (v < lo || v > hi) {
+            fail(key, std::to_string(v),
+                 "is not in " + std::to_string(lo) + ".." + std::to_string(hi));
+        }
+    }
+    void finite(const std::string &key, double v) {
+        if (!std::isfinite(v)) fail(key, format_double(v), "is not finite");
+    }
+    void positive(const std::string &key, double v) {
+        finite(key, v);
+        if (!(v > 0.0)) fail(key, format_double(v), "is not > 0");
+    }
+    void non_negative(const std::string &key, double v) {
+        finite(key, v);
+        if (!(v >= 0.0)) fail(key, format_double(v), "is not >= 0");
+    }
+    // lo < v < hi, or lo < v <= hi with hi_closed.
+    void open_interval(const std::string &key, double v, double lo, double hi, bool hi_closed) {
+        finite(key, v);
+        if (!(v > lo && (hi_closed ? v <= hi : v < hi))) {
+            fail(key, format_double(v),
+                 "is not in (" + bound(lo) + ", " + bound(hi) + (hi_closed ? "]" : ")"));
+        }
+    }
+    void channel(const std::string &key, const std::string &name) {
+        if (name.empty()) {
+            fail(key, "\"\"", "is empty");
+        } else if (name.size() > kLcmChannelMax) {
+            fail(key, quoted(name),
+                 "is longer than " + std::to_string(kLcmChannelMax) + " characters (LCM's limit)");
+        } else {
+            for (const char c : name) {
+                if (std::string(".[]{}()*+?^$|\\").find(c) != std::string::npos ||
+                    std::isgraph(static_cast<unsigned char>(c)) == 0) {
+                    fail(key, quoted(name),
+                         std::string("contains '") + c +
+                             "' (a channel name is matched exactly: no blanks, control or "
+                             "regular-expression characters)");
+                    return;
+                }
+            }
+        }
+    }
+
+  private:
+    static constexpr size_t kLcmChannelMax = 63;  // LCM_MAX_CHANNEL_NAME_LENGTH of <lcm/lcm.h>
+    const AppConfig &cfg_;
+    std::string *error_;
+    bool failed_ = false;
+};
+
+}  // namespace
+
 bool validate(const AppConfig &cfg, std::string *error) {
-    const sfd_status_t st = sfd_params_validate(&cfg.node.params);
-    if (st == SFD_OK) return true;
-    *error = std::string("invalid detector parameters (") + sfd_status_str(st) +
-             "): check false_alarm_rate (0, 0.5], pixel_sigma_px > 0, window_frames 2.." +
-             std::to_string(SFD_MAX_WINDOW) + ", group_size 1.." + std::to_string(SFD_MAX_GROUP) +
-             ", default_depth_m > 0, default_depth_var_m2 >= 0, max_imu_gap_us > 0, 0/1 flags";
-    return false;
+    Checker c(cfg, error);
+    const sfd_params_t &p = cfg.node.params;
+    const sfd_nav_config_t &nv = cfg.node.nav;
+    const sfd_ekf_noise_t &nz = nv.noise;
+    // The detector (sfd_params_validate), in the order of apps/config/sfd.yaml.
+    if (!(p.method >= 0 && p.method < kNumMethods && cfg.method == kMethods[p.method])) {
+        c.fail("method", quoted(cfg.method), std::string("is not one of ") + kMethodList);
+    }
+    c.open_interval("false_alarm_rate", p.false_alarm_rate, 0.0, 0.5, true);
+    c.positive("pixel_sigma_px", p.pixel_sigma_px);
+    c.integer("window_frames", p.window_frames, 2, SFD_MAX_WINDOW);
+    c.integer("group_size", p.group_size, 1, SFD_MAX_GROUP);
+    c.flag("translation_known", p.translation_known);
+    c.flag("exact_depth_covariance", p.exact_depth_covariance);
+    c.flag("parity_isolation", p.parity_isolation);
+    c.positive("default_depth_m", p.default_depth_m);
+    c.non_negative("default_depth_var_m2", p.default_depth_var_m2);
+    if (p.max_imu_gap_us <= 0) {
+        c.fail("max_imu_gap_us", std::to_string(p.max_imu_gap_us), "is not > 0");
+    }
+    // The time-glitch policy (sfd_time_guard_params_validate).
+    if (cfg.node.time.horizon_us <= 0) {
+        c.fail("time_horizon_us", std::to_string(cfg.node.time.horizon_us), "is not > 0");
+    }
+    c.integer("time_resync_messages", cfg.node.time.resync_messages, 2, 1000);
+    for (int k = 0; k < 3; ++k) {
+        c.finite("gyro_bias_rad_s[" + std::to_string(k) + "]", p.gyro_bias_rad_s[k]);
+    }
+    c.integer("max_hypotheses", p.max_hypotheses, 1, SFD_MAX_HYPOTHESES);
+    c.open_interval("ransac_confidence", p.ransac_confidence, 0.0, 1.0, false);
+    // The filter (sfd_nav_init, sfd_window_init, sfd_rest_init, sfd_ekf_init, sfd_assoc_init).
+    c.flag("filter.enabled", nv.enabled);
+    c.non_negative("filter.gyro_noise_rad_s_rthz", nz.gyro_noise_rad_s_rthz);
+    c.non_negative("filter.accel_noise_m_s2_rthz", nz.accel_noise_m_s2_rthz);
+    c.non_negative("filter.gyro_bias_rw_rad_s2_rthz", nz.gyro_bias_rw_rad_s2_rthz);
+    c.non_negative("filter.accel_bias_rw_m_s3_rthz", nz.accel_bias_rw_m_s3_rthz);
+    c.positive("filter.gravity_m_s2", nz.gravity_m_s2);
+    c.flag("filter.window_filter", nv.window_filter);
+    c.integer("filter.window_size", nv.window_size, 2, SFD_MAX_WINDOW);
+    c.open_interval("filter.window_gate_alpha", nv.window_gate_alpha, 0.0, 0.5, true);
+    c.flag("filter.first_estimates", nv.first_estimates);
+    c.open_interval("filter.init_rest_s", nv.init_rest_s, 0.0, 60.0, false);
+    c.flag("filter.init_from_truth", nv.init_from_truth);
+    for (int k = 0; k < 3; ++k) {
+        c.finite("filter.init_accel_bias_m_s2[" + std::to_string(k) + "]",
+                 nv.init_accel_bias_m_s2[k]);
+    }
+    c.flag("filter.consider_position", nv.consider_position);
+    c.flag("filter.gyro_bias_at_rest", nv.gyro_bias_at_rest);
+    c.non_negative("filter.landmark_depth_var_m2", nv.landmark_depth_var_m2);
+    // > 0 (sfd_nav_init); at most 9e9 s, so that the age in microseconds fits in an int64.
+    c.open_interval("filter.landmark_max_age_s", nv.landmark_max_age_s, 0.0, kMaxMicros * 1e-6,
+                    true);
+    c.open_interval("filter.landmark_gate_alpha", nv.landmark_gate_alpha, 0.0, 1.0, false);
+    c.non_negative("filter.min_parallax_px", nv.min_parallax_px);
+    // Not keys of the file (programs that fill the struct): the core's ranges all the same.
+    c.positive("filter.max_dt_s", nz.max_dt_s);
+    for (int k = 0; k < SFD_EKF_DIM; ++k) {
+        c.non_negative("filter.p0_diag[" + std::to_string(k) + "]", nv.p0_diag[k]);
+    }
+    // The node.
+    if (cfg.node.camera_id < -1) {
+        c.fail("camera_id", std::to_string(cfg.node.camera_id),
+               "is not -1 or in 0.." + std::to_string(std::numeric_limits<int32_t>::max()));
+    }
+    c.flag("publish_timing", cfg.node.publish_timing);
+    if (cfg.lcm_url.empty()) c.fail("lcm_url", "\"\"", "is empty");
+    const std::string *names[] = {&cfg.channels.imu,      &cfg.channels.camera_info,
+                                  &cfg.channels.features, &cfg.channels.verdict,
+                                  &cfg.channels.timing,   &cfg.channels.state,
+                                  &cfg.channels.truth};
+    const char *keys[] = {"channels.imu",     "channels.camera_info", "channels.features",
+                          "channels.verdict", "channels.timing",      "channels.state",
+                          "channels.truth"};
+    constexpr int kChannels = static_cast<int>(sizeof keys / sizeof keys[0]);
+    for (int k = 0; k < kChannels; ++k) c.channel(keys[k], *names[k]);
+    for (int k = 1; k < kChannels; ++k) {
+        for (int j = 0; j < k; ++j) {
+            if (*names[k] == *names[j]) {  // named: the one that was set (a default is not)
+                const bool first =
+                    cfg.origin_of(keys[k]) == "default" && cfg.origin_of(keys[j]) != "default";
+                c.fail(first ? keys[j] : keys[k], quoted(*names[k]),
+                       std::string("is the same as ") + (first ? keys[k] : keys[j]));
+            }
+        }
+    }
+    // Across keys (sfd_pipeline_init): the association methods run on the filter.
+    const int m = p.method;
+    if ((m == SFD_METHOD_OPRF || m == SFD_METHOD_RANSAC1 || m == SFD_METHOD_RANSACF ||
+         m == SFD_METHOD_BOTH) &&
+        nv.enabled == 0) {
+        c.fail("method", quoted(cfg.method),
+               "needs filter.enabled: 1 (it is 0, from " + cfg.origin_of("filter.enabled") + ")");
+    }
+    if (c.failed()) return false;
+    // The core's own validators: a range above that differs from theirs is a bug of this file.
+    sfd_status_t st = sfd_params_validate(&p);
+    if (st == SFD_OK) st = sfd_time_guard_params_validate(&cfg.node.time);
+    if (st != SFD_OK) {
+        *error = std::string("internal: the core refuses a configuration validate() accepts (") +
+                 sfd_status_str(st) + ")";
+        return false;
+    }
+    return true;
+}
+
+bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
+    return read_config(path, cfg, error) && validate(*cfg, error);
+}
+
+bool parse_int_option(const char *option, const char *text, int *out, std::string *error) {
+    char *end = nullptr;
+    errno = 0;
+    const long long v = std::strtoll(text, &end, 10);
+    if (end == text || *end != '\0') {
+        *error = std::string(option) + " " + text + ": not an integer";
+        return false;
+    }
+    if (errno == ERANGE || v < std::numeric_limits<int>::min() ||
+        v > std::numeric_limits<int>::max()) {
+        *error = std::string(option) + " " + text + ": out of the integer range";
+        return false;
+    }
+    *out = static_cast<int>(v);
+    return true;
+}
+
+bool parse_double_option(const char *option, const char *text, double *out, std::string *error) {
+    char *end = nullptr;
+    const double v = std::strtod(text, &end);
+    if (end == text || *end != '\0') {
+        *error = std::string(option) + " " + text + ": not a number";
+        return false;
+    }
+    *out = v;
+    return true;
+}
+
+std::vector<std::string> split_options(int argc, char **argv,
+                                       const std::set<std::string> &value_options) {
+    std::vector<std::string> words;
+    for (int i = 0; i < argc; ++i) {
+        const std::string a = argv[i];
+        const size_t eq = a.find('=');
+        if (i > 0 && a.rfind("--", 0) == 0 && eq != std::string::npos &&
+            value_options.count(a.substr(0, eq)) != 0) {
+            words.push_back(a.substr(0, eq));
+            words.push_back(a.substr(eq + 1));
+        } else {
+            words.push_back(a);
+        }
+    }
+    return words;
 }
 
 bool parse_long(const char *s, long lo, long hi, long *out) {

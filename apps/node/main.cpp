@@ -15,7 +15,9 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <set>
 #include <string>
+#include <vector>
 
 #include "sfd_app_config.hpp"
 #include "sfd_node_core.h"
@@ -160,7 +162,8 @@ void usage(FILE *f) {
         "usage: sfd-node [--config F] [--lcm-url URL] [--method M]\n"
         "                [--imu-channel C] [--camera-info-channel C]\n"
         "                [--features-channel C] [--verdict-channel C] [--timing-channel C]\n"
-        "                [--truth-channel C] [--sched-fifo P] [--cpu N] [--lock-memory]\n"
+        "                [--state-channel C] [--truth-channel C] [--sched-fifo P] [--cpu N]\n"
+        "                [--lock-memory]\n"
         "  Subscribes IMU, CAMERA_INFO, FEATURES (and TRUTH with filter.init_from_truth:\n"
         "  1, evaluation only); publishes SFD_VERDICT, SFD_STATE, SFD_TIMING.\n"
         "  --config F    YAML configuration (apps/config/sfd.yaml documents every key)\n"
@@ -172,27 +175,68 @@ void usage(FILE *f) {
         "  --cpu N         pin the process to CPU N (e.g. one kept free with isolcpus)\n"
         "  --lock-memory   mlockall(current and future) and pre-fault 256 KiB of stack, so no\n"
         "                  page fault lands in a frame (needs CAP_IPC_LOCK or ulimit -l)\n"
+        "  Options also as --opt=value. The configuration (files, then the flags over\n"
+        "  them) is validated as a whole, as by sfd-replay; the first bad key is exit 2\n"
+        "  naming its file or flag, the key and the value, before LCM starts.\n"
         "Stops on SIGINT/SIGTERM. Exit: 0 ok, 2 bad usage or configuration, 1 internal.\n");
 }
 
+// Options that take a value (also accepted as --opt=value).
+const std::set<std::string> kValueOptions = {"--config",
+                                             "--lcm-url",
+                                             "--method",
+                                             "--imu-channel",
+                                             "--camera-info-channel",
+                                             "--features-channel",
+                                             "--verdict-channel",
+                                             "--timing-channel",
+                                             "--state-channel",
+                                             "--truth-channel",
+                                             "--sched-fifo",
+                                             "--cpu"};
+
 }  // namespace
 
-int main(int argc, char **argv) {
+int main(int argc_in, char **argv_in) {
     sfdapp::AppConfig &cfg = g_app.cfg;
     std::string err;
     Realtime rt;
-    // The config file first, then the flags over it.
+    std::vector<std::string> words = sfdapp::split_options(argc_in, argv_in, kValueOptions);
+    std::vector<char *> args;
+    args.reserve(words.size());
+    for (std::string &w : words) args.push_back(&w[0]);
+    const int argc = static_cast<int>(args.size());
+    char **argv = args.data();
+    // The config files first, then the flags over them, then one validation of the result
+    // (sfdapp::validate, the same as sfd-replay's): any bad key is exit 2 before LCM starts.
     for (int i = 1; i + 1 < argc; ++i) {
         if (!std::strcmp(argv[i], "--config")) {
-            if (!sfdapp::load_config(argv[i + 1], &cfg, &err)) {
+            if (!sfdapp::read_config(argv[i + 1], &cfg, &err)) {
                 std::fprintf(stderr, "sfd-node: %s\n", err.c_str());
                 return 2;
             }
         }
     }
+    // A flag that sets a key of the configuration: the key's origin in error messages.
+    struct ChannelFlag {
+        const char *flag;
+        const char *key;
+        std::string *dst;
+    } const channel_flags[] = {
+        {"--imu-channel", "channels.imu", &cfg.channels.imu},
+        {"--camera-info-channel", "channels.camera_info", &cfg.channels.camera_info},
+        {"--features-channel", "channels.features", &cfg.channels.features},
+        {"--verdict-channel", "channels.verdict", &cfg.channels.verdict},
+        {"--timing-channel", "channels.timing", &cfg.channels.timing},
+        {"--state-channel", "channels.state", &cfg.channels.state},
+        {"--truth-channel", "channels.truth", &cfg.channels.truth}};
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const bool has = i + 1 < argc;
+        const ChannelFlag *channel = nullptr;
+        for (const ChannelFlag &f : channel_flags) {
+            if (!std::strcmp(a, f.flag)) channel = &f;
+        }
         if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
             usage(stdout);
             return 0;
@@ -200,23 +244,16 @@ int main(int argc, char **argv) {
             ++i;
         } else if (!std::strcmp(a, "--lcm-url") && has) {
             cfg.lcm_url = argv[++i];
+            cfg.origin["lcm_url"] = a;
         } else if (!std::strcmp(a, "--method") && has) {
             if (!sfdapp::set_method(argv[++i], &cfg, &err)) {
-                std::fprintf(stderr, "sfd-node: --method: %s\n", err.c_str());
+                std::fprintf(stderr, "sfd-node: --method %s: %s\n", argv[i], err.c_str());
                 return 2;
             }
-        } else if (!std::strcmp(a, "--imu-channel") && has) {
-            cfg.channels.imu = argv[++i];
-        } else if (!std::strcmp(a, "--camera-info-channel") && has) {
-            cfg.channels.camera_info = argv[++i];
-        } else if (!std::strcmp(a, "--features-channel") && has) {
-            cfg.channels.features = argv[++i];
-        } else if (!std::strcmp(a, "--verdict-channel") && has) {
-            cfg.channels.verdict = argv[++i];
-        } else if (!std::strcmp(a, "--timing-channel") && has) {
-            cfg.channels.timing = argv[++i];
-        } else if (!std::strcmp(a, "--truth-channel") && has) {
-            cfg.channels.truth = argv[++i];
+            cfg.origin["method"] = a;
+        } else if (channel != nullptr && has) {
+            *channel->dst = argv[++i];
+            cfg.origin[channel->key] = a;
         } else if (!std::strcmp(a, "--sched-fifo") && has) {
             long v = 0;
             if (!sfdapp::parse_long(argv[++i], 1, 99, &v)) {
@@ -246,7 +283,9 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (sfd_node_init(&g_node, &cfg.node, on_publish, clock_us, &g_app) != SFD_OK) {
-        std::fprintf(stderr, "sfd-node: node initialization failed\n");
+        std::fprintf(stderr,
+                     "sfd-node: internal: node initialization failed on a validated "
+                     "configuration\n");
         return 1;
     }
     if (!apply_scheduling(rt)) return 1;

@@ -17,6 +17,7 @@
 #include <cstring>
 #include <exception>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -260,38 +261,68 @@ void usage(FILE *f) {
         "  renamed into place when the run succeeds (special files such as /dev/null\n"
         "  are written directly); a failed write is exit 1 naming the path, and a\n"
         "  failed run leaves no output behind (an older one stays as it was).\n"
+        "Configuration: --config files (several: later keys win), then the flags over\n"
+        "  them (--alpha false_alarm_rate, --window window_frames, --group group_size,\n"
+        "  --pixel-sigma pixel_sigma_px, --depth-default default_depth_m, --no-isolation\n"
+        "  parity_isolation: 0), validated as a whole as by sfd-node: the first bad key\n"
+        "  is exit 2 naming its file or flag, the key and the value. Options also as\n"
+        "  --opt=value.\n"
         "Exit: 0 ok, 2 bad usage or bad input (a one-line reason naming the file),\n"
         "  1 internal failure or a failed write.\n");
 }
 
-double parse_double(const char *flag, const char *s, double lo, double hi, bool *ok) {
-    char *end = nullptr;
-    const double v = std::strtod(s, &end);
-    if (*end != '\0' || !(v >= lo && v <= hi)) {
-        std::fprintf(stderr, "sfd-replay: %s: expected %g..%g, got %s\n", flag, lo, hi, s);
-        *ok = false;
-    }
-    return v;
-}
+// Options that take a value (also accepted as --opt=value).
+const std::set<std::string> kValueOptions = {
+    "--config", "-o",      "--summary",     "--method",       "--alpha",
+    "--window", "--group", "--pixel-sigma", "--depth-default"};
 
-int run(int argc, char **argv) {
+int run(int argc_in, char **argv_in) {
+    std::vector<std::string> words = sfdapp::split_options(argc_in, argv_in, kValueOptions);
+    std::vector<char *> args;
+    args.reserve(words.size());
+    for (std::string &w : words) args.push_back(&w[0]);
+    const int argc = static_cast<int>(args.size());
+    char **argv = args.data();
     const char *in_path = nullptr, *out_path = nullptr, *summary_path = nullptr;
     bool score_only = false, salvage = false;
     std::vector<std::pair<const char *, std::string>> inputs;
     sfdapp::AppConfig app_cfg;
     std::string err;
-    for (int i = 1; i + 1 < argc; ++i) {  // the config file first, flags override it
+    // The config files first, then the flags over them, then one validation of the result
+    // (sfdapp::validate, the same as sfd-node's).
+    for (int i = 1; i + 1 < argc; ++i) {
         if (!std::strcmp(argv[i], "--config") &&
-            !sfdapp::load_config(argv[i + 1], &app_cfg, &err)) {
+            !sfdapp::read_config(argv[i + 1], &app_cfg, &err)) {
             std::fprintf(stderr, "sfd-replay: %s\n", err.c_str());
             return 2;
         }
     }
     sfd_node_config_t &cfg = app_cfg.node;
-    bool ok = true;
-    for (int i = 1; i < argc && ok; ++i) {
+    // Flags that set a number of the configuration: the YAML key (its origin in the messages).
+    struct IntFlag {
+        const char *flag;
+        const char *key;
+        int *dst;
+    } const int_flags[] = {{"--window", "window_frames", &cfg.params.window_frames},
+                           {"--group", "group_size", &cfg.params.group_size}};
+    struct RealFlag {
+        const char *flag;
+        const char *key;
+        double *dst;
+    } const real_flags[] = {{"--alpha", "false_alarm_rate", &cfg.params.false_alarm_rate},
+                            {"--pixel-sigma", "pixel_sigma_px", &cfg.params.pixel_sigma_px},
+                            {"--depth-default", "default_depth_m", &cfg.params.default_depth_m}};
+    for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const bool has = i + 1 < argc;
+        const IntFlag *int_flag = nullptr;
+        const RealFlag *real_flag = nullptr;
+        for (const IntFlag &f : int_flags) {
+            if (!std::strcmp(a, f.flag)) int_flag = &f;
+        }
+        for (const RealFlag &f : real_flags) {
+            if (!std::strcmp(a, f.flag)) real_flag = &f;
+        }
         if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
             usage(stdout);
             return 0;
@@ -303,25 +334,29 @@ int run(int argc, char **argv) {
             summary_path = argv[++i];
         } else if (!std::strcmp(a, "--method") && has) {
             if (!sfdapp::set_method(argv[++i], &app_cfg, &err)) {
-                std::fprintf(stderr, "sfd-replay: --method: %s\n", err.c_str());
+                std::fprintf(stderr, "sfd-replay: --method %s: %s\n", argv[i], err.c_str());
                 return 2;
             }
-        } else if (!std::strcmp(a, "--alpha") && has) {
-            cfg.params.false_alarm_rate = parse_double(a, argv[++i], 1e-12, 0.5, &ok);
-        } else if (!std::strcmp(a, "--window") && has) {
-            cfg.params.window_frames = int(parse_double(a, argv[++i], 2, SFD_MAX_WINDOW, &ok));
-        } else if (!std::strcmp(a, "--group") && has) {
-            cfg.params.group_size = int(parse_double(a, argv[++i], 1, SFD_MAX_GROUP, &ok));
-        } else if (!std::strcmp(a, "--pixel-sigma") && has) {
-            cfg.params.pixel_sigma_px = parse_double(a, argv[++i], 1e-6, 1e3, &ok);
-        } else if (!std::strcmp(a, "--depth-default") && has) {
-            cfg.params.default_depth_m = parse_double(a, argv[++i], 1e-3, 1e6, &ok);
+            app_cfg.origin["method"] = a;
+        } else if (int_flag != nullptr && has) {
+            if (!sfdapp::parse_int_option(a, argv[++i], int_flag->dst, &err)) {
+                std::fprintf(stderr, "sfd-replay: %s\n", err.c_str());
+                return 2;
+            }
+            app_cfg.origin[int_flag->key] = a;
+        } else if (real_flag != nullptr && has) {
+            if (!sfdapp::parse_double_option(a, argv[++i], real_flag->dst, &err)) {
+                std::fprintf(stderr, "sfd-replay: %s\n", err.c_str());
+                return 2;
+            }
+            app_cfg.origin[real_flag->key] = a;
         } else if (!std::strcmp(a, "--score-only")) {
             score_only = true;
         } else if (!std::strcmp(a, "--salvage")) {
             salvage = true;
         } else if (!std::strcmp(a, "--no-isolation")) {
             cfg.params.parity_isolation = 0;
+            app_cfg.origin["parity_isolation"] = a;
         } else if (a[0] != '-' && in_path == nullptr) {
             in_path = a;
         } else {
@@ -330,7 +365,6 @@ int run(int argc, char **argv) {
             return 2;
         }
     }
-    if (!ok) return 2;
     if (!sfdapp::validate(app_cfg, &err)) {
         std::fprintf(stderr, "sfd-replay: %s\n", err.c_str());
         return 2;
@@ -387,9 +421,11 @@ int run(int argc, char **argv) {
         }
     }
     if (sfd_node_init(&g_node, &cfg, on_publish, nullptr, &g_app) != SFD_OK) {
-        std::fprintf(stderr, "sfd-replay: invalid detector parameters\n");
+        std::fprintf(stderr,
+                     "sfd-replay: internal: node initialization failed on a validated "
+                     "configuration\n");
         if (g_app.out != nullptr) lcm_eventlog_destroy(g_app.out);
-        return 2;
+        return 1;
     }
     const bool progress = isatty(STDERR_FILENO) != 0;
     std::map<int64_t, TruthRecord> truth;  // TRUTH by frame time

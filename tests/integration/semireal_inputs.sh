@@ -94,7 +94,7 @@ set +e
 "$build/apps/sfd-replay" "$tmp/good.lcmlog" --config "$tmp/bad2.yaml" >/dev/null 2>"$tmp/err.txt"
 rc=$?
 set -e
-if [ "$rc" -ne 2 ] || ! grep -q "filter.init_accel_bias_m_s2: expected a list of 3 numbers" "$tmp/err.txt"; then
+if [ "$rc" -ne 2 ] || ! grep -q "filter.init_accel_bias_m_s2: \[0.1, 0.2\] is not a list of 3 numbers" "$tmp/err.txt"; then
   echo "FAIL: a 2-element init_accel_bias_m_s2 was not refused (exit $rc)"; cat "$tmp/err.txt"; exit 1
 fi
 echo "sfd-replay config: $(cat "$tmp/err.txt")"
