@@ -4,7 +4,8 @@
  * 6 m cylinder, 20 Hz frames, a 200 Hz IMU with the modelled white noise and bias random walks,
  * 1 px of pixel noise at f = 400 px):
  * - the estimate stays within 2 % of the distance flown, and the position and attitude NEES over
- *   20 Monte Carlo runs of 30 s are inside their 95 % chi-square bands;
+ *   20 Monte Carlo runs of 30 s are inside their 95 % chi-square bands (under way, from rest,
+ *   and from rest with ten times the initial uncertainty);
  * - the four unobservable directions (translation, yaw about gravity) stay in the null space of
  *   the linearized system: Phi N_k = N_k+1 over each frame interval and H N = 0 for the tracks,
  *   with the observability constraint and with first estimates, not with current estimates;
@@ -38,6 +39,10 @@ static double g_pts[NPTS][3];
 enum { JAC_CURRENT = 0, JAC_FIRST_ESTIMATES = 1, JAC_OBSERVABILITY = 2 };
 static const char *const kJacName[3] = {"current-estimate", "first-estimate",
                                         "observability-constrained"};
+
+/* The initial uncertainty of a run: P0 (the filter's, and the spread the initial errors and
+ * biases are drawn from) is the default's times this. */
+static double g_p0_scale = 1.0;
 
 /* Null-space check of a run (null_space_check = 1): the largest relative violations seen. */
 static int g_null_check = 0;
@@ -249,6 +254,7 @@ static void run_flight_from(uint64_t seed, double seconds, int jac, int jump_tra
     assert_status(sfd_window_params_default(&prm), SFD_OK);
     prm.first_estimates = jac == JAC_FIRST_ESTIMATES;
     prm.observability_constrained = jac == JAC_OBSERVABILITY;
+    for (int i = 0; i < SFD_WINDOW_IMU_DIM; ++i) prm.p0_diag[i] *= g_p0_scale;
     prm.use_depth_prior = 0;
     assert_status(sfd_window_init(&g_w, &prm), SFD_OK);
     /* Initial state drawn from P0 around the truth; true biases drawn from P0 too. */
@@ -463,10 +469,11 @@ static void nees_check(uint64_t seed0, int at_rest) {
     for (int jac = 0; jac < 3; ++jac) {
         monte_carlo(seed0, at_rest, jac, &mc[jac]);
         printf(
-            "  %s, %s Jacobians: NEES position %.2f, attitude %.2f (band %.2f..%.2f); mean "
+            "  %s%s, %s Jacobians: NEES position %.2f, attitude %.2f (band %.2f..%.2f); mean "
             "errors %.3f m, %.2f mrad\n",
-            at_rest ? "from rest" : "under way", kJacName[jac], mc[jac].nees_pos, mc[jac].nees_att,
-            lo, hi, mc[jac].pos_err_m, 1e3 * mc[jac].att_err_rad);
+            at_rest ? "from rest" : "under way", g_p0_scale > 1.0 ? " (P0 x 10)" : "",
+            kJacName[jac], mc[jac].nees_pos, mc[jac].nees_att, lo, hi, mc[jac].pos_err_m,
+            1e3 * mc[jac].att_err_rad);
     }
     const monte_carlo_t *oc = &mc[JAC_OBSERVABILITY];
     assert_true(oc->nees_pos >= lo && oc->nees_pos <= hi);
@@ -481,6 +488,19 @@ static void pose_nees_is_inside_its_chi_square_band(void **state) {
     (void)state;
     SFD_REQ("issue16.nees_band");
     nees_check(100, 0);
+}
+
+/* Larger start-up errors (P0 times 10: roll and pitch 32 mrad, velocity 3 cm/s, accelerometer
+ * bias 0.2 m/s^2), from rest: the first corrections are then large, and first-estimate Jacobians
+ * keep linearizing at the estimates from before them (the weakness FEJ2 addresses: Chen, Geneva,
+ * Huang, ICRA 2022). The default must stay in its band. (Measured: first estimates 186.9 / 99.7,
+ * 2.8 m; core/docs/window_filter.md.) */
+static void pose_nees_with_ten_times_the_initial_uncertainty(void **state) {
+    (void)state;
+    SFD_REQ("issue16.nees_band");
+    g_p0_scale = 10.0;
+    nees_check(200, 1);
+    g_p0_scale = 1.0;
 }
 
 /* The product's start: 1 s at rest, sfd_window_start_at_rest, then the flight. */
@@ -602,6 +622,7 @@ int main(void) {
         cmocka_unit_test(flight_stays_close_to_the_truth),
         cmocka_unit_test(pose_nees_is_inside_its_chi_square_band),
         cmocka_unit_test(pose_nees_from_a_start_at_rest),
+        cmocka_unit_test(pose_nees_with_ten_times_the_initial_uncertainty),
         cmocka_unit_test(unobservable_directions_stay_unobservable),
         cmocka_unit_test(a_jumped_track_is_gated_and_does_not_pull),
         cmocka_unit_test(flagged_tracks_are_dropped_and_capacities_hold),

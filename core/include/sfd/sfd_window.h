@@ -24,8 +24,9 @@
  * dp_i = g x p_i, dtheta_i = g for clone i), at the estimates before each update. Then
  * Phi N_k = N_k+1 and H N = 0, and the filter does not gain false confidence in them. Roll and
  * pitch keep the current-estimate Jacobian. First-estimate Jacobians (Li & Mourikis 2013) are an
- * option (first_estimates = 1); they measured over-confident here (core/docs/window_filter.md).
- * Residuals are always evaluated at the current estimate.
+ * option (first_estimates = 1): consistent from the default P0, over-confident from ten times it
+ * (core/docs/window_filter.md). Residuals, and the perspective derivative d(x/z, y/z)/dp_C, are
+ * always evaluated at the current estimate (the point where it was triangulated).
  *
  * Per frame (sfd_window_frame): clone the current IMU pose into the window; add the frame's
  * observations (normalized undistorted coordinates, their 2x2 covariance from the pixel noise
@@ -79,8 +80,9 @@ typedef struct {
     double depth_var_floor_m2;       /**< added to the wire's depth variance (1e-4) */
     int32_t gauss_newton_iterations; /**< triangulation steps, 1..20 (5) */
     int32_t first_estimates;         /**< 1: first-estimate Jacobians (an option: over-confident in
-                                          unit.window's Monte Carlo, core/docs/window_filter.md); it
-                                          overrides observability_constrained. 0: current estimates (0) */
+                                          unit.window's Monte Carlo from ten times the default P0,
+                                          core/docs/window_filter.md); it overrides
+                                          observability_constrained. 0: current estimates (0) */
     int32_t observability_constrained; /**< with first_estimates 0: 1 the current-estimate
                                             Jacobians corrected along gravity so the unobservable
                                             directions stay unobservable (1, the default); 0 no
