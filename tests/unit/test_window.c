@@ -44,7 +44,7 @@ static const char *const kJacName[3] = {"current-estimate", "first-estimate",
  * biases are drawn from) is the default's times this. */
 static double g_p0_scale = 1.0;
 
-/* Null-space check of a run (null_space_check = 1): the largest relative violations seen. */
+/* Null-space check of a run (g_null_check = 1): the largest relative violations seen. */
 static int g_null_check = 0;
 static double g_phi_violation = 0.0, g_h_violation = 0.0;
 static int g_h_checked = 0;
