@@ -4,7 +4,11 @@
  * 6 m cylinder, 20 Hz frames, a 200 Hz IMU with the modelled white noise and bias random walks,
  * 1 px of pixel noise at f = 400 px):
  * - the estimate stays within 2 % of the distance flown, and the position and attitude NEES over
- *   20 Monte Carlo runs of 30 s are inside their 95 % chi-square bands;
+ *   20 Monte Carlo runs of 30 s are inside their 95 % chi-square bands (under way, from rest,
+ *   and from rest with ten times the initial uncertainty);
+ * - the four unobservable directions (translation, yaw about gravity) stay in the null space of
+ *   the linearized system: Phi N_k = N_k+1 over each frame interval and H N = 0 for the tracks,
+ *   with the observability constraint and with first estimates, not with current estimates;
  * - the gate refuses a track that jumps to another point (and lists it), the estimate is not
  *   pulled, and the jumped observations never reach the update; a flagged track is dropped;
  * - capacities (tracks, window) and bad input are status codes or counters, never writes past an
@@ -30,6 +34,20 @@ typedef struct {
 } pose_t;
 
 static double g_pts[NPTS][3];
+
+/* The Jacobians a run uses (sfd_window_params_t: first_estimates, observability_constrained). */
+enum { JAC_CURRENT = 0, JAC_FIRST_ESTIMATES = 1, JAC_OBSERVABILITY = 2 };
+static const char *const kJacName[3] = {"current-estimate", "first-estimate",
+                                        "observability-constrained"};
+
+/* The initial uncertainty of a run: P0 (the filter's, and the spread the initial errors and
+ * biases are drawn from) is the default's times this. */
+static double g_p0_scale = 1.0;
+
+/* Null-space check of a run (g_null_check = 1): the largest relative violations seen. */
+static int g_null_check = 0;
+static double g_phi_violation = 0.0, g_h_violation = 0.0;
+static int g_h_checked = 0;
 
 static void mat_mul(const double A[9], const double B[9], double C[9]) {
     for (int r = 0; r < 3; ++r) {
@@ -123,26 +141,108 @@ typedef struct {
     double nees_pose; /* 6-dof (position, global attitude) NEES at the end */
     double nees_pos;
     double pos_err_m;
+    double att_err_rad;
     int gated, used, frames;
 } run_result_t;
 
 /* A jump: from frame jump_frame on, track jump_track is 20 px off its point (locked onto another
  * image point). */
-static void run_flight_from(uint64_t seed, double seconds, int first_estimates, int jump_track,
-                            int jump_frame, int at_rest, run_result_t *out);
+static void run_flight_from(uint64_t seed, double seconds, int jac, int jump_track, int jump_frame,
+                            int at_rest, run_result_t *out);
 
 /* A flight under way at t = 0, the filter started at the truth with errors drawn from P0. */
-static void run_flight(uint64_t seed, double seconds, int first_estimates, int jump_track,
-                       int jump_frame, run_result_t *out) {
-    run_flight_from(seed, seconds, first_estimates, jump_track, jump_frame, 0, out);
+static void run_flight(uint64_t seed, double seconds, int jac, int jump_track, int jump_frame,
+                       run_result_t *out) {
+    run_flight_from(seed, seconds, jac, jump_track, jump_frame, 0, out);
+}
+
+/* g x a */
+static void gcross(double g, const double a[3], double out[3]) { /* (0, 0, -g) x a */
+    out[0] = g * a[1];
+    out[1] = -g * a[0];
+    out[2] = 0.0;
+}
+
+/* The unobservable directions of the IMU block at the filter's first estimates (fe_p, fe_v):
+ * N[i][c], rows 0..14, columns: translation x, y, z and yaw about gravity (dp = g x p,
+ * dv = g x v, dtheta = g). */
+static void imu_null(const sfd_window_t *w, const double fe_p[3], const double fe_v[3],
+                     double N[SFD_WINDOW_IMU_DIM][4]) {
+    const double g = w->prm.noise.gravity_m_s2;
+    memset(N, 0, sizeof(double) * SFD_WINDOW_IMU_DIM * 4);
+    double gp[3], gv[3];
+    gcross(g, fe_p, gp);
+    gcross(g, fe_v, gv);
+    for (int k = 0; k < 3; ++k) {
+        N[SFD_WINDOW_IDX_P + k][k] = 1.0;
+        N[SFD_WINDOW_IDX_P + k][3] = gp[k];
+        N[SFD_WINDOW_IDX_V + k][3] = gv[k];
+    }
+    N[SFD_WINDOW_IDX_THETA + 2][3] = -g;
+}
+
+/* Phi N_k against N_k+1 over one frame interval (Phi: the transition accumulated since the last
+ * frame; N_k at the first estimates before it, N_k+1 at those after it), relative to |N|. */
+static double phi_null_violation(const sfd_window_t *w, const double fe_p0[3],
+                                 const double fe_v0[3]) {
+    double N0[SFD_WINDOW_IMU_DIM][4], N1[SFD_WINDOW_IMU_DIM][4];
+    imu_null(w, fe_p0, fe_v0, N0);
+    imu_null(w, w->fe_p_IinW_m, w->fe_v_IinW_m_s, N1);
+    double worst = 0.0;
+    for (int c = 0; c < 4; ++c) {
+        double num = 0.0, den = 0.0;
+        for (int i = 0; i < SFD_WINDOW_IMU_DIM; ++i) {
+            double s = 0.0;
+            for (int k = 0; k < SFD_WINDOW_IMU_DIM; ++k) s += w->Phi[i][k] * N0[k][c];
+            num += (s - N1[i][c]) * (s - N1[i][c]);
+            den += N1[i][c] * N1[i][c];
+        }
+        if (sqrt(num / den) > worst) worst = sqrt(num / den);
+    }
+    return worst;
+}
+
+/* H N for the last projected track of a frame (scratch_track: its rows are N_f^T H_x, the point
+ * projected out), with N at the clones' first-estimate positions: clones[] as they were before
+ * the frame's marginalization. Relative to |H row| |N column|. */
+static double h_null_violation(const sfd_window_t *w, const sfd_window_clone_t *clones,
+                               int num_clones) {
+    const sfd_msckf_track_t *tr = &w->scratch_track;
+    const double g = w->prm.noise.gravity_m_s2;
+    double worst = 0.0;
+    for (int c = 0; c < 4; ++c) {
+        double Ncol[SFD_MSCKF_DIM] = {0};
+        for (int i = 0; i < num_clones; ++i) {
+            const int col = SFD_WINDOW_IMU_DIM + 6 * i;
+            if (c < 3) {
+                Ncol[col + c] = 1.0;
+            } else {
+                double gp[3];
+                gcross(g, clones[i].fe_p_IinW_m, gp);
+                for (int k = 0; k < 3; ++k) Ncol[col + k] = gp[k];
+                Ncol[col + 5] = -g;
+            }
+        }
+        double nn = 0.0;
+        for (int j = 0; j < tr->n; ++j) nn += Ncol[j] * Ncol[j];
+        for (int r = 0; r < tr->rows; ++r) {
+            double s = 0.0, hh = 0.0;
+            for (int j = 0; j < tr->n; ++j) {
+                s += tr->Hx[r][j] * Ncol[j];
+                hh += tr->Hx[r][j] * tr->Hx[r][j];
+            }
+            if (hh > 0.0 && fabs(s) / sqrt(hh * nn) > worst) worst = fabs(s) / sqrt(hh * nn);
+        }
+    }
+    return worst;
 }
 
 /* at_rest = 1: 1 s at rest first; the filter starts at rest as the product does
  * (sfd_window_start_at_rest from the mean IMU sample of that second), then the flight ramps up.
  * The errors are then those of the estimated start, in the frame the start defines (origin at
  * the start, yaw 0: the truth's own at tau = 0). */
-static void run_flight_from(uint64_t seed, double seconds, int first_estimates, int jump_track,
-                            int jump_frame, int at_rest, run_result_t *out) {
+static void run_flight_from(uint64_t seed, double seconds, int jac, int jump_track, int jump_frame,
+                            int at_rest, run_result_t *out) {
     g_rest_s = at_rest ? 1.0 : 0.0;
     const int rest_samples = at_rest ? 200 : 0;
     sfd_prng_t rng;
@@ -152,7 +252,9 @@ static void run_flight_from(uint64_t seed, double seconds, int first_estimates, 
     extrinsics(&ext);
     sfd_window_params_t prm;
     assert_status(sfd_window_params_default(&prm), SFD_OK);
-    prm.first_estimates = first_estimates;
+    prm.first_estimates = jac == JAC_FIRST_ESTIMATES;
+    prm.observability_constrained = jac == JAC_OBSERVABILITY;
+    for (int i = 0; i < SFD_WINDOW_IMU_DIM; ++i) prm.p0_diag[i] *= g_p0_scale;
     prm.use_depth_prior = 0;
     assert_status(sfd_window_init(&g_w, &prm), SFD_OK);
     /* Initial state drawn from P0 around the truth; true biases drawn from P0 too. */
@@ -194,7 +296,13 @@ static void run_flight_from(uint64_t seed, double seconds, int first_estimates, 
     sfd_window_obs_t obs[SFD_WINDOW_MAX_TRACKS];
     sfd_window_result_t res;
     memset(out, 0, sizeof *out);
+    g_phi_violation = 0.0;
+    g_h_violation = 0.0;
+    g_h_checked = 0;
     for (int f = 1; f <= frames; ++f) {
+        double fe_p0[3], fe_v0[3];
+        memcpy(fe_p0, g_w.fe_p_IinW_m, sizeof fe_p0);
+        memcpy(fe_v0, g_w.fe_v_IinW_m_s, sizeof fe_v0);
         for (int s = 0; s < IMU_PER_FRAME; ++s) {
             const int i = rest_samples + (f - 1) * IMU_PER_FRAME + s;
             pose_t a, b;
@@ -237,9 +345,25 @@ static void run_flight_from(uint64_t seed, double seconds, int first_estimates, 
             obs[n].cov_xn[0] = obs[n].cov_xn[2] = kSigmaXn * kSigmaXn;
             ++n;
         }
+        sfd_window_clone_t clones[SFD_MAX_WINDOW];
+        int num_clones = 0;
+        if (g_null_check) {
+            const double vp = phi_null_violation(&g_w, fe_p0, fe_v0);
+            if (vp > g_phi_violation) g_phi_violation = vp;
+            /* the clones of the frame's update: those held now and the one it adds */
+            num_clones = g_w.num_clones;
+            memcpy(clones, g_w.clones, sizeof(sfd_window_clone_t) * (size_t)num_clones);
+            memcpy(clones[num_clones].fe_p_IinW_m, g_w.fe_p_IinW_m, sizeof g_w.fe_p_IinW_m);
+            ++num_clones;
+        }
         assert_status(sfd_window_frame(&g_w, (int64_t)rest_samples * 5000 + (int64_t)f * 50000, obs,
                                        n, &ext, &res),
                       SFD_OK);
+        if (g_null_check && g_w.scratch_track.projected) {
+            const double vh = h_null_violation(&g_w, clones, num_clones);
+            if (vh > g_h_violation) g_h_violation = vh;
+            ++g_h_checked;
+        }
         assert_status(res.update_status, SFD_OK);
         out->gated += res.gated;
         out->used += res.used;
@@ -264,6 +388,7 @@ static void run_flight_from(uint64_t seed, double seconds, int first_estimates, 
     sfd_so3_log(E, e + 3);
     for (int k = 0; k < 3; ++k) e[k] = x.p[k] - g_w.p_IinW_m[k];
     out->pos_err_m = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    out->att_err_rad = sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]);
     /* NEES = e^T P^-1 e over (p, theta): Cholesky of the 6x6 block */
     double S[6][6];
     const int idx[6] = {0, 1, 2, 6, 7, 8};
@@ -300,7 +425,7 @@ static void run_flight_from(uint64_t seed, double seconds, int first_estimates, 
 static void flight_stays_close_to_the_truth(void **state) {
     (void)state;
     run_result_t r;
-    run_flight(1, 20.0, 0, -1, 0, &r);
+    run_flight(1, 20.0, JAC_OBSERVABILITY, -1, 0, &r);
     printf("  20 s, 25 m: position error %.3f m, tracks used %d, gated %d\n", r.pos_err_m, r.used,
            r.gated);
     assert_true(r.pos_err_m < 0.5); /* 2 % of the 25 m flown (measured 0.31 m) */
@@ -309,61 +434,107 @@ static void flight_stays_close_to_the_truth(void **state) {
     assert_true(r.gated < 0.04 * (r.used + r.gated));
 }
 
-/* 20 Monte Carlo runs of 30 s with the shipped Jacobians (current estimates): the sum of the
- * position NEES at the end is chi2(60) for a consistent filter, the attitude's too; 95 % band.
- * (First-estimate Jacobians fail this from the default initial uncertainty: position 22.6,
- * attitude 17.0 against 2.02..4.16; core/docs/window_filter.md.) */
+typedef struct {
+    double nees_pos, nees_att; /* means over the runs */
+    double pos_err_m, att_err_rad;
+} monte_carlo_t;
+
+/* RUNS runs of 30 s (seeds seed0 + k), under way or from a start at rest, with Jacobians jac. */
+enum { RUNS = 20 };
+static void monte_carlo(uint64_t seed0, int at_rest, int jac, monte_carlo_t *mc) {
+    memset(mc, 0, sizeof *mc);
+    for (int k = 0; k < RUNS; ++k) {
+        run_result_t r;
+        run_flight_from(seed0 + (uint64_t)k, 30.0, jac, -1, 0, at_rest, &r);
+        mc->nees_pos += r.nees_pos / RUNS;
+        mc->nees_att += (r.nees_pose - r.nees_pos) / RUNS;
+        mc->pos_err_m += r.pos_err_m / RUNS;
+        mc->att_err_rad += r.att_err_rad / RUNS;
+    }
+}
+
+/* The sum over RUNS runs of the position NEES at the end is chi2(3 RUNS) for a consistent
+ * filter, the attitude's too. Every Jacobian choice is printed; the default (observability
+ * constraint) must be inside the 95 % band for both, and its mean errors no worse than the
+ * current-estimate Jacobians': position within 5 %, attitude within 10 % (its error is mostly yaw,
+ * a random walk: on these seeds +5 % under way and +3 % from rest, but over 60 other seeds
+ * -0.4 % +- 1.1 % under way and +0.8 % +- 2.2 % from rest, paired; core/docs/window_filter.md). */
+static void nees_check(uint64_t seed0, int at_rest) {
+    double lo = 0.0, hi = 0.0;
+    assert_status(sfd_chi2_quantile_upper(0.975, 3 * RUNS, &lo), SFD_OK);
+    assert_status(sfd_chi2_quantile_upper(0.025, 3 * RUNS, &hi), SFD_OK);
+    lo /= RUNS;
+    hi /= RUNS;
+    monte_carlo_t mc[3];
+    for (int jac = 0; jac < 3; ++jac) {
+        monte_carlo(seed0, at_rest, jac, &mc[jac]);
+        printf(
+            "  %s%s, %s Jacobians: NEES position %.2f, attitude %.2f (band %.2f..%.2f); mean "
+            "errors %.3f m, %.2f mrad\n",
+            at_rest ? "from rest" : "under way", g_p0_scale > 1.0 ? " (P0 x 10)" : "",
+            kJacName[jac], mc[jac].nees_pos, mc[jac].nees_att, lo, hi, mc[jac].pos_err_m,
+            1e3 * mc[jac].att_err_rad);
+    }
+    const monte_carlo_t *oc = &mc[JAC_OBSERVABILITY];
+    assert_true(oc->nees_pos >= lo && oc->nees_pos <= hi);
+    assert_true(oc->nees_att >= lo && oc->nees_att <= hi);
+    assert_true(oc->pos_err_m < 0.6); /* 2 % of the ~28 m flown */
+    assert_true(oc->pos_err_m <= 1.05 * mc[JAC_CURRENT].pos_err_m);
+    assert_true(oc->att_err_rad <= 1.10 * mc[JAC_CURRENT].att_err_rad);
+}
+
+/* A flight under way, the filter started at the truth with errors drawn from P0. */
 static void pose_nees_is_inside_its_chi_square_band(void **state) {
     (void)state;
     SFD_REQ("issue16.nees_band");
-    enum { RUNS = 20 };
-    double sum = 0.0, sum3 = 0.0;
-    for (int k = 0; k < RUNS; ++k) {
-        run_result_t r;
-        run_flight(100 + (uint64_t)k, 30.0, 0, -1, 0, &r);
-        sum += r.nees_pose;
-        sum3 += r.nees_pos;
-    }
-    double lo = 0.0, hi = 0.0;
-    assert_status(sfd_chi2_quantile_upper(0.975, 3 * RUNS, &lo), SFD_OK);
-    assert_status(sfd_chi2_quantile_upper(0.025, 3 * RUNS, &hi), SFD_OK);
-    printf("  NEES means over %d runs: position %.2f, attitude %.2f (band %.2f..%.2f each)\n", RUNS,
-           sum3 / RUNS, (sum - sum3) / RUNS, lo / RUNS, hi / RUNS);
-    assert_true(sum3 >= lo && sum3 <= hi);
-    assert_true(sum - sum3 >= lo && sum - sum3 <= hi);
+    nees_check(100, 0);
 }
 
-/* The product's start: 1 s at rest, sfd_window_start_at_rest, then the flight. 20 Monte Carlo
- * runs of 30 s with each Jacobian choice, printed; the shipped one (current estimates) must be in
- * the 95 % band for position and attitude. (Measured: current 2.59 / 2.55; first estimates
- * 121.6 / 45.5, core/docs/window_filter.md.) */
+/* Larger start-up errors (P0 times 10: roll and pitch 32 mrad, velocity 3 cm/s, accelerometer
+ * bias 0.2 m/s^2), from rest: the first corrections are then large, and first-estimate Jacobians
+ * keep linearizing at the estimates from before them (the weakness FEJ2 addresses: Chen, Geneva,
+ * Huang, ICRA 2022). The default must stay in its band. (Measured: first estimates 186.9 / 99.7,
+ * 2.8 m; core/docs/window_filter.md.) */
+static void pose_nees_with_ten_times_the_initial_uncertainty(void **state) {
+    (void)state;
+    SFD_REQ("issue16.nees_band");
+    g_p0_scale = 10.0;
+    nees_check(200, 1);
+    g_p0_scale = 1.0;
+}
+
+/* The product's start: 1 s at rest, sfd_window_start_at_rest, then the flight. */
 static void pose_nees_from_a_start_at_rest(void **state) {
     (void)state;
     SFD_REQ("issue16.nees_band");
-    enum { RUNS = 20 };
-    double lo = 0.0, hi = 0.0;
-    assert_status(sfd_chi2_quantile_upper(0.975, 3 * RUNS, &lo), SFD_OK);
-    assert_status(sfd_chi2_quantile_upper(0.025, 3 * RUNS, &hi), SFD_OK);
-    for (int fe = 0; fe <= 1; ++fe) {
-        double sum = 0.0, sum3 = 0.0, err = 0.0;
-        for (int k = 0; k < RUNS; ++k) {
-            run_result_t r;
-            run_flight_from(200 + (uint64_t)k, 30.0, fe, -1, 0, 1, &r);
-            sum += r.nees_pose;
-            sum3 += r.nees_pos;
-            err += r.pos_err_m;
-        }
+    nees_check(200, 1);
+}
+
+/* The unobservable directions at the first estimates (translation; yaw about gravity) against
+ * the linearized system of a 10 s flight from rest: the accumulated transition of every frame
+ * interval must map them onto themselves (Phi N_k = N_k+1) and every projected track's Jacobian
+ * must annihilate them (H N = 0), to rounding, with the observability constraint and with first
+ * estimates. The current-estimate Jacobians must violate it (the check can fail). */
+static void unobservable_directions_stay_unobservable(void **state) {
+    (void)state;
+    SFD_REQ("issue16.consistency");
+    double phi[3], h[3];
+    for (int jac = 0; jac < 3; ++jac) {
+        run_result_t r;
+        g_null_check = 1;
+        run_flight_from(300, 10.0, jac, -1, 0, 1, &r);
+        g_null_check = 0;
+        phi[jac] = g_phi_violation;
+        h[jac] = g_h_violation;
         printf(
-            "  from rest, %s Jacobians: NEES position %.2f, attitude %.2f (band %.2f..%.2f); "
-            "mean position error %.3f m\n",
-            fe ? "first-estimate" : "current-estimate", sum3 / RUNS, (sum - sum3) / RUNS, lo / RUNS,
-            hi / RUNS, err / RUNS);
-        if (fe == 0) {
-            assert_true(sum3 >= lo && sum3 <= hi);
-            assert_true(sum - sum3 >= lo && sum - sum3 <= hi);
-            assert_true(err / RUNS < 0.6); /* 2 % of the ~28 m flown */
-        }
+            "  %s Jacobians: |Phi N_k - N_k+1| / |N| <= %.2e, |H N| / (|H| |N|) <= %.2e "
+            "(%d tracks)\n",
+            kJacName[jac], phi[jac], h[jac], g_h_checked);
+        assert_true(g_h_checked > 100);
     }
+    assert_true(phi[JAC_OBSERVABILITY] < 1e-9 && h[JAC_OBSERVABILITY] < 1e-9);
+    assert_true(phi[JAC_FIRST_ESTIMATES] < 1e-9 && h[JAC_FIRST_ESTIMATES] < 1e-9);
+    assert_true(phi[JAC_CURRENT] > 1e-6 && h[JAC_CURRENT] > 1e-6);
 }
 
 static void a_jumped_track_is_gated_and_does_not_pull(void **state) {
@@ -386,8 +557,8 @@ static void a_jumped_track_is_gated_and_does_not_pull(void **state) {
         if (observe(&x, &ext, g_pts[i], xn) && observe(&xp, &ext, g_pts[i], xn)) track = i;
     }
     assert_true(track >= 0);
-    run_flight(7, 4.0, 0, -1, 0, &clean);
-    run_flight(7, 4.0, 0, track, 40, &jumped);
+    run_flight(7, 4.0, JAC_OBSERVABILITY, -1, 0, &clean);
+    run_flight(7, 4.0, JAC_OBSERVABILITY, track, 40, &jumped);
     printf("  jump at frame 40 gated at frame %d; error %.3f m (clean %.3f m)\n", jumped.frames,
            jumped.pos_err_m, clean.pos_err_m);
     assert_true(jumped.frames >= 40 && jumped.frames <= 40 + SFD_MAX_WINDOW);
@@ -451,6 +622,8 @@ int main(void) {
         cmocka_unit_test(flight_stays_close_to_the_truth),
         cmocka_unit_test(pose_nees_is_inside_its_chi_square_band),
         cmocka_unit_test(pose_nees_from_a_start_at_rest),
+        cmocka_unit_test(pose_nees_with_ten_times_the_initial_uncertainty),
+        cmocka_unit_test(unobservable_directions_stay_unobservable),
         cmocka_unit_test(a_jumped_track_is_gated_and_does_not_pull),
         cmocka_unit_test(flagged_tracks_are_dropped_and_capacities_hold),
     };

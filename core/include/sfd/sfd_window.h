@@ -14,13 +14,19 @@
  * Error state (15 + 6 L, order SFD_WINDOW_IDX_*, clone i at 15 + 6 i: dp, dtheta):
  *   p = p^ + dp, v = v^ + dv, R = Exp(dtheta) R^ (dtheta in the WORLD frame, "global", unlike the
  *   local error of sfd_ekf.h: it makes the unobservable yaw direction the same vector for every
- *   pose, which first-estimate Jacobians rely on), bg = bg^ + dbg, ba = ba^ + dba.
+ *   pose, which the consistency treatment relies on), bg = bg^ + dbg, ba = ba^ + dba.
  *
- * Consistency: first-estimate Jacobians (Li & Mourikis 2013). The IMU transition is evaluated at
- * the position and velocity the state had before the last update, each clone's measurement
- * Jacobian at the pose it was cloned with; so the filter's linearized system keeps the four
- * unobservable directions (global position, yaw about gravity) unobservable and the filter does
- * not gain false confidence in them. Residuals are evaluated at the current estimate.
+ * Consistency (default): observability-constrained Jacobians (Hesch et al., IEEE T-RO 2014). The
+ * Jacobians are evaluated at the current estimate, then the columns acting on the attitude error
+ * along gravity (Phi_ptheta, Phi_vtheta and each clone's measurement Jacobian) get the smallest
+ * rank-one correction that keeps the four unobservable directions unobservable: global
+ * translation (dp = dp_i = I) and yaw about gravity (dp = g x p, dv = g x v, dtheta = g, and
+ * dp_i = g x p_i, dtheta_i = g for clone i), at the estimates before each update. Then
+ * Phi N_k = N_k+1 and H N = 0, and the filter does not gain false confidence in them. Roll and
+ * pitch keep the current-estimate Jacobian. First-estimate Jacobians (Li & Mourikis 2013) are an
+ * option (first_estimates = 1): consistent from the default P0, over-confident from ten times it
+ * (core/docs/window_filter.md). Residuals, and the perspective derivative d(x/z, y/z)/dp_C, are
+ * always evaluated at the current estimate (the point where it was triangulated).
  *
  * Per frame (sfd_window_frame): clone the current IMU pose into the window; add the frame's
  * observations (normalized undistorted coordinates, their 2x2 covariance from the pixel noise
@@ -73,10 +79,14 @@ typedef struct {
     int32_t use_depth_prior;  /**< 1: the first observation's depth prior is a measurement (1) */
     double depth_var_floor_m2;       /**< added to the wire's depth variance (1e-4) */
     int32_t gauss_newton_iterations; /**< triangulation steps, 1..20 (5) */
-    int32_t first_estimates; /**< 0: Jacobians at the current estimate (0, the default: inside
-                                  the NEES band in unit.window); 1: first-estimate Jacobians
-                                  (an option: over-confident in unit.window's Monte Carlo,
-                                  core/docs/window_filter.md) */
+    int32_t first_estimates;         /**< 1: first-estimate Jacobians (an option: over-confident in
+                                          unit.window's Monte Carlo from ten times the default P0,
+                                          core/docs/window_filter.md); it overrides
+                                          observability_constrained. 0: current estimates (0) */
+    int32_t observability_constrained; /**< with first_estimates 0: 1 the current-estimate
+                                            Jacobians corrected along gravity so the unobservable
+                                            directions stay unobservable (1, the default); 0 no
+                                            consistency treatment */
 } sfd_window_params_t;
 
 /** One observation handed to sfd_window_frame(). */
@@ -122,7 +132,9 @@ typedef struct {
 typedef struct {
     double p_IinW_m[3];
     double q_ItoW[4];
-    double fe_p_IinW_m[3]; /**< first estimate: the pose at cloning (Jacobians) */
+    double fe_p_IinW_m[3]; /**< first estimate: the pose at cloning (the IMU's first estimate of
+                                the position; first-estimate Jacobians, and the point of the
+                                clone's yaw direction for the observability constraint) */
     double fe_R_ItoW[9];
     int64_t utime;
     uint32_t seq; /**< sequence number (consecutive over the window) */
@@ -138,7 +150,8 @@ typedef struct {
     double q_ItoW[4];
     double bg_rad_s[3];
     double ba_m_s2[3];
-    /* first estimates of the IMU state for the next transition (before the last update) */
+    /* first estimates of the IMU state for the next transition (before the last update): the
+     * point of the unobservable directions (both treatments) */
     double fe_p_IinW_m[3];
     double fe_v_IinW_m_s[3];
     /* transition and noise accumulated since the covariance was last brought up to date */
@@ -154,7 +167,9 @@ typedef struct {
     sfd_window_track_t tracks[SFD_WINDOW_MAX_TRACKS];
     int16_t index[SFD_WINDOW_INDEX_SLOTS]; /**< track id -> tracks[] entry, -1 empty */
     uint32_t numeric_faults;               /**< updates or propagations refused */
-    /* scratch of one frame (no content kept between calls) */
+    /* scratch of one frame (no content kept between calls; after sfd_window_frame, scratch_track
+     * holds the last track of that frame that reached the projection when its projected is 1,
+     * with the clone columns of before the frame's marginalization: unit.window reads it) */
     sfd_msckf_track_t scratch_track;
     sfd_msckf_stack_t scratch_stack;
     sfd_msckf_work_t scratch_work;
@@ -190,8 +205,9 @@ sfd_status_t sfd_window_start_at(sfd_window_t *w, int64_t utime, const double p_
 /**
  * @brief Propagates the IMU state by one interval dt with gyro and accel held (zero-order hold):
  *        R' = R Exp(w dt), v' = v + (R a + g) dt, p' = p + v dt + (R a + g) dt^2 / 2 with
- *        w = gyro - bg, a = accel - ba. The transition Phi (first-estimate form, eq. (5) of
- *        core/docs/window_filter.md) and the discrete noise accumulate; the covariance is brought
+ *        w = gyro - bg, a = accel - ba. The transition Phi (eq. (5) of
+ *        core/docs/window_filter.md, with the consistency treatment of the parameters) and the
+ *        discrete noise accumulate; the covariance is brought
  *        up to date when the next frame or a reader needs it.
  * @return SFD_OK; SFD_ERR_STATE when not started; SFD_ERR_INVAL for null, non-finite values or
  *         dt outside (0, max_dt_s] (nothing changed); SFD_ERR_NUMERIC when the result is not
