@@ -492,7 +492,8 @@ bool read_config(const std::string &path, AppConfig *cfg, std::string *error) {
                      {"consider_position", &nv.consider_position},
                      {"window_filter", &nv.window_filter},
                      {"window_size", &nv.window_size},
-                     {"first_estimates", &nv.first_estimates}};
+                     {"first_estimates", &nv.first_estimates},
+                     {"observability_constrained", &nv.observability_constrained}};
         std::set<std::string> fknown = {"init_accel_bias_m_s2"};
         for (const FKey &k : fnums) fknown.insert(k.name);
         for (const FInt &k : fints) fknown.insert(k.name);
@@ -661,6 +662,7 @@ bool validate(const AppConfig &cfg, std::string *error) {
     c.integer("filter.window_size", nv.window_size, 2, SFD_MAX_WINDOW);
     c.open_interval("filter.window_gate_alpha", nv.window_gate_alpha, 0.0, 0.5, true);
     c.flag("filter.first_estimates", nv.first_estimates);
+    c.flag("filter.observability_constrained", nv.observability_constrained);
     c.open_interval("filter.init_rest_s", nv.init_rest_s, 0.0, 60.0, false);
     c.flag("filter.init_from_truth", nv.init_from_truth);
     for (int k = 0; k < 3; ++k) {

@@ -22,6 +22,7 @@ void sfd_nav_config_default(sfd_nav_config_t *cfg) {
     cfg->window_size = SFD_MAX_WINDOW;
     cfg->window_gate_alpha = 0.01;
     cfg->first_estimates = 0;
+    cfg->observability_constrained = 1;
     cfg->init_rest_s = 1.0;
     cfg->gyro_bias_at_rest = 1;
     cfg->landmark_depth_var_m2 = 100.0;
@@ -59,7 +60,8 @@ sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd
         if (!isfinite(cfg->init_accel_bias_m_s2[k])) return SFD_ERR_INVAL;
     }
     if ((cfg->window_filter != 0 && cfg->window_filter != 1) ||
-        (cfg->first_estimates != 0 && cfg->first_estimates != 1)) {
+        (cfg->first_estimates != 0 && cfg->first_estimates != 1) ||
+        (cfg->observability_constrained != 0 && cfg->observability_constrained != 1)) {
         return SFD_ERR_INVAL;
     }
     if (cfg->window_filter) {
@@ -70,6 +72,7 @@ sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd
         wp.min_observations = wp.window < 3 ? wp.window : 3;
         wp.gate_alpha = cfg->window_gate_alpha;
         wp.first_estimates = cfg->first_estimates;
+        wp.observability_constrained = cfg->observability_constrained;
         if (sfd_window_init(&nav->win, &wp) != SFD_OK) return SFD_ERR_INVAL;
         sfd_rest_params_t rp;
         sfd_rest_params_default(&rp);

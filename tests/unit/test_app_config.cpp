@@ -135,6 +135,8 @@ std::vector<BadValue> bad_values() {
          "filter.window_gate_alpha: 0 is not in (0, 0.5]"},
         {"filter.first_estimates", [](C &c) { c.node.nav.first_estimates = -1; },
          "filter.first_estimates: -1 is not 0 or 1"},
+        {"filter.observability_constrained", [](C &c) { c.node.nav.observability_constrained = 2; },
+         "filter.observability_constrained: 2 is not 0 or 1"},
         {"filter.init_rest_s", [](C &c) { c.node.nav.init_rest_s = 0.0; },
          "filter.init_rest_s: 0 is not in (0, 60)"},
         {"filter.init_rest_s", [](C &c) { c.node.nav.init_rest_s = 60.0; },
@@ -258,6 +260,7 @@ void accepted_configurations_start_a_node(void **) {
         [](C &c) { c.node.nav.window_gate_alpha = 0.5; },
         [](C &c) { c.node.nav.window_gate_alpha = 1e-12; },
         [](C &c) { c.node.nav.first_estimates = 1; },
+        [](C &c) { c.node.nav.observability_constrained = 0; },
         [](C &c) { c.node.nav.init_rest_s = 59.9; },
         [](C &c) {
             c.node.nav.window_filter = 0;

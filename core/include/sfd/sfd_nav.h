@@ -35,28 +35,32 @@ extern "C" {
 
 /** Configuration of the navigation side (YAML section `filter`, apps/config/sfd.yaml). */
 typedef struct {
-    int32_t enabled;              /**< 1: run the EKF (required by oprf, ransac1, ransacf, both) */
-    int32_t window_filter;        /**< 1: the sliding-window filter (sfd_window.h), started when
-                                       rest is detected (sfd_rest.h); 0: the single-state EKF
-                                       with self-built landmarks (sfd_ekf.h, older) */
-    int32_t window_size;          /**< clones L of the window filter, 2..SFD_MAX_WINDOW */
-    double window_gate_alpha;     /**< false-alarm rate of its per-track chi-square gate */
-    int32_t first_estimates;      /**< window filter: 1 first-estimate Jacobians, 0 current */
-    sfd_ekf_noise_t noise;        /**< IMU noise densities */
-    double p0_diag[SFD_EKF_DIM];  /**< initial variances, SFD_EKF_IDX_* order */
-    double init_rest_s;           /**< IMU averaged at rest for the gravity start (s), > 0 */
-    int32_t gyro_bias_at_rest;    /**< 1: the mean gyro at rest is the initial bias; 0: the
-                                       configured params.gyro_bias_rad_s */
-    double landmark_depth_var_m2; /**< depth variance of a landmark whose feature has no depth
-                                       prior (the default depth is params.default_depth_m) */
-    double landmark_max_age_s;    /**< landmarks unseen for longer are dropped (s), > 0 */
-    double landmark_gate_alpha;   /**< false-alarm rate of the landmark refinement gate */
-    double min_parallax_px;       /**< OPRF degenerate-motion threshold (sfd_assoc_params_t) */
-    int32_t init_from_truth;      /**< evaluation only (SPEC): start from the first two TRUTH poses
-                                       (velocity from their difference) instead of at rest */
-    int32_t consider_position;    /**< 1: camera updates do not correct the position (sfd_ekf_t
-                                       consider states): self-built landmarks hold no absolute
-                                       position information */
+    int32_t enabled;          /**< 1: run the EKF (required by oprf, ransac1, ransacf, both) */
+    int32_t window_filter;    /**< 1: the sliding-window filter (sfd_window.h), started when
+                                   rest is detected (sfd_rest.h); 0: the single-state EKF
+                                   with self-built landmarks (sfd_ekf.h, older) */
+    int32_t window_size;      /**< clones L of the window filter, 2..SFD_MAX_WINDOW */
+    double window_gate_alpha; /**< false-alarm rate of its per-track chi-square gate */
+    int32_t first_estimates;  /**< window filter: 1 first-estimate Jacobians (overrides the
+                                   next), 0 current estimates */
+    int32_t observability_constrained; /**< window filter, first_estimates 0: 1 current-estimate
+                                            Jacobians with the observability constraint (the
+                                            default), 0 without (core/docs/window_filter.md) */
+    sfd_ekf_noise_t noise;             /**< IMU noise densities */
+    double p0_diag[SFD_EKF_DIM];       /**< initial variances, SFD_EKF_IDX_* order */
+    double init_rest_s;                /**< IMU averaged at rest for the gravity start (s), > 0 */
+    int32_t gyro_bias_at_rest;         /**< 1: the mean gyro at rest is the initial bias; 0: the
+                                            configured params.gyro_bias_rad_s */
+    double landmark_depth_var_m2;      /**< depth variance of a landmark whose feature has no depth
+                                            prior (the default depth is params.default_depth_m) */
+    double landmark_max_age_s;         /**< landmarks unseen for longer are dropped (s), > 0 */
+    double landmark_gate_alpha;        /**< false-alarm rate of the landmark refinement gate */
+    double min_parallax_px;            /**< OPRF degenerate-motion threshold (sfd_assoc_params_t) */
+    int32_t init_from_truth;   /**< evaluation only (SPEC): start from the first two TRUTH poses
+                                    (velocity from their difference) instead of at rest */
+    int32_t consider_position; /**< 1: camera updates do not correct the position (sfd_ekf_t
+                                    consider states): self-built landmarks hold no absolute
+                                    position information */
     double init_accel_bias_m_s2[3]; /**< init_from_truth: the accelerometer bias the filter
                                          starts with (IMU frame, m/s^2; TRUTH carries none);
                                          the gyro bias is params.gyro_bias_rad_s */
