@@ -130,14 +130,24 @@ static void started(sfd_nav_t *nav, int64_t utime) {
 }
 
 /* The window filter starts when the IMU of [t - init_rest_s, t] is at rest by the rest detector
- * (blocks of its block_samples, as many whole blocks as the samples fill, up to its window; at
- * least 2): gravity's direction and the gyro bias from that window, position 0, yaw 0. Not at
- * rest: no start (not a rejection), the next frame tries again. */
+ * (blocks of its default block_samples, as many whole blocks as the samples fill, up to its
+ * default window, at least 2; with more samples than that window holds, the default number of
+ * longer blocks): gravity's direction and the gyro bias from that window, position 0, yaw 0.
+ * Not at rest: no start (not a rejection), the next frame tries again. */
 static int start_window_at_rest(sfd_nav_t *nav, const sfd_imu_span_t *span, int64_t t_us) {
     const int32_t n = sfd_imu_span_count(span);
-    sfd_rest_params_t rp = nav->rest.p;
+    sfd_rest_params_t rp;
+    sfd_rest_params_default(&rp);
+    rp.gravity_m_s2 = nav->cfg.noise.gravity_m_s2;
+    /* More samples than the default window holds (an IMU faster than 200 Hz): longer blocks, the
+     * default number of them, so that the test keeps its degrees of freedom. */
+    const int32_t full = rp.block_samples * rp.window_blocks;
+    if (n > full) {
+        const int32_t bs = n / rp.window_blocks;
+        rp.block_samples = bs > 1000 ? 1000 : bs;
+    }
     int32_t blocks = n / rp.block_samples;
-    if (blocks > SFD_REST_MAX_BLOCKS) blocks = SFD_REST_MAX_BLOCKS;
+    if (blocks > rp.window_blocks) blocks = rp.window_blocks;
     if (blocks < 2) return SFD_REJECT_NONE;
     rp.window_blocks = blocks;
     if (sfd_rest_init(&nav->rest, &rp) != SFD_OK) return SFD_REJECT_CORE;
@@ -164,7 +174,13 @@ static int start_window_at_rest(sfd_nav_t *nav, const sfd_imu_span_t *span, int6
 static int start_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us) {
     const int64_t rest_us = (int64_t)(nav->cfg.init_rest_s * 1e6);
     sfd_imu_span_t span;
-    const int r = sfd_imu_ring_span(ring, t_us - rest_us, t_us, SFD_IMU_RING_CAPACITY, &span);
+    int r = sfd_imu_ring_span(ring, t_us - rest_us, t_us, SFD_IMU_RING_CAPACITY, &span);
+    if (r == SFD_REJECT_IMU_GAP && ring->count == SFD_IMU_RING_CAPACITY) {
+        /* The full ring spans less than init_rest_s (an IMU faster than the capacity was sized
+         * for): the rest window is what it holds, rather than never starting. */
+        r = sfd_imu_ring_span(ring, ring->samples[ring->head].t_us, t_us, SFD_IMU_RING_CAPACITY,
+                              &span);
+    }
     const int32_t n = (r == SFD_REJECT_NONE) ? sfd_imu_span_count(&span) : 0;
     /* Not yet init_rest_s of IMU before this frame: keep waiting (not a rejection). */
     if (r == SFD_REJECT_IMU_GAP || (r == SFD_REJECT_NONE && n < 2)) return SFD_REJECT_NONE;

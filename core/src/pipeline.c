@@ -310,7 +310,16 @@ static int64_t imu_needed_from(const sfd_pipeline_t *p, int64_t t_us) {
     if (p->cfg.nav.enabled && nav->ready && nav->ekf_utime < from) from = nav->ekf_utime;
     if (p->cfg.nav.enabled && !nav->ready && !p->cfg.nav.init_from_truth) {
         const int64_t rest_us = (int64_t)(p->cfg.nav.init_rest_s * 1e6);
-        from = (t_us > INT64_MIN + rest_us) ? t_us - rest_us : INT64_MIN;
+        /* The ring's span when full, at the rate seen so far: a ring too short for the rest
+         * window makes the start use what it holds (nav.c), so no older sample is needed. */
+        const sfd_imu_ring_t *r = &p->ring;
+        const double span_full_us =
+            r->count >= 2 ? (double)(sfd_imu_ring_newest(r) - r->samples[r->head].t_us) *
+                                (double)(SFD_IMU_RING_CAPACITY - 1) / (double)(r->count - 1)
+                          : 1e300;
+        if (span_full_us >= (double)rest_us) {
+            from = (t_us > INT64_MIN + rest_us) ? t_us - rest_us : INT64_MIN;
+        }
     }
     return from;
 }

@@ -445,7 +445,7 @@ static void lcm_node_waiting_filter_keeps_its_rest_window(void **state) {
     assert_true(g_node.pipe.ring.lost == 0);
     assert_true(g_node.pipe.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == 0);
     const int newest_dropped = feed_imu_past_the_ring(&f, 0.0);
-    const int rest_samples = (int)(g_node.cfg.nav.init_rest_s * 1e6) / 5000; /* 100 at 0.5 s */
+    const int rest_samples = (int)(g_node.cfg.nav.init_rest_s * 1e6) / 5000; /* 200 at 1 s */
     const int first_needed = f.last_frame_sample - rest_samples;
     assert_true(g_node.pipe.ring.lost == newest_dropped - first_needed + 1);
     assert_true(g_node.pipe.counters.rejected[SFD_REJECT_IMU_OVERFLOW] == g_node.pipe.ring.lost);

@@ -439,6 +439,32 @@ static void malformed_features_and_missing_frames_are_counted(void **state) {
     assert_string_equal(sfd_reject_reason_str(SFD_REJECT_NUM_REASONS), "unknown");
 }
 
+/* GIVEN a 1 kHz IMU at rest (the ring's 512 samples span 0.51 s, less than the 1 s rest window)
+ * WHEN frames come THEN the filter still starts at rest, from what the full ring holds (it used
+ * to wait for ever). */
+static void a_fast_imu_still_starts_the_filter_at_rest(void **state) {
+    (void)state;
+    start(&g_p);
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 15);
+    int64_t t_imu = 0;
+    for (int f = 1; f <= 60; ++f) {
+        make_frame(&rng, f, &g_frame);
+        sfd_imu_sample_t s;
+        do {
+            imu_sample(&rng, 0, &s);
+            t_imu += 1000;
+            s.t_us = t_imu;
+            assert_int_equal(sfd_pipeline_push_imu(&g_p, &s), SFD_REJECT_NONE);
+        } while (s.t_us < g_frame.utime);
+        assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_NONE);
+        assert_status(sfd_pipeline_judge(&g_p), SFD_OK);
+    }
+    assert_true(g_p.cfg.nav.init_rest_s * 1e6 > (double)SFD_IMU_RING_CAPACITY * 1000.0);
+    assert_int_equal(g_p.nav.starts, 1);
+    assert_int_equal(sfd_pipeline_output(&g_p)->has_state, 1);
+}
+
 /* GIVEN null arguments or a method that needs the filter with the filter off THEN init refuses. */
 static void init_refuses_invalid_configurations(void **state) {
     (void)state;
@@ -471,6 +497,7 @@ int main(void) {
         cmocka_unit_test(a_restarted_publisher_is_followed_after_n_messages),
         cmocka_unit_test(a_known_map_and_start_localize_from_the_first_frame),
         cmocka_unit_test(malformed_features_and_missing_frames_are_counted),
+        cmocka_unit_test(a_fast_imu_still_starts_the_filter_at_rest),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

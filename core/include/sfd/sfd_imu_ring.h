@@ -19,9 +19,11 @@ extern "C" {
 #endif
 
 /** Samples kept: 512 = 2.56 s at 200 Hz (56 B each, 28 KiB). The ring must span the rest
- *  window of the filter's start (init_rest_s, 0.5 s) plus one frame interval and the transport's
- *  lead of IMU over features; a faster IMU (1 kHz: 0.51 s) needs a larger -DSFD_IMU_RING_CAPACITY.
- *  Readers take the samples in place (sfd_imu_ring_span), so no copy of them is kept. */
+ *  window of the filter's start (filter.init_rest_s, 1 s as shipped) plus one frame interval and
+ *  the transport's lead of IMU over features. A faster IMU needs a larger
+ *  -DSFD_IMU_RING_CAPACITY (at 1 kHz, 512 samples are 0.51 s: less than the rest window, so the
+ *  filter could not start; 2048 would do). Readers take the samples in place
+ *  (sfd_imu_ring_span), so no copy of them is kept. */
 #ifndef SFD_IMU_RING_CAPACITY
 #define SFD_IMU_RING_CAPACITY 512
 #endif
