@@ -76,11 +76,21 @@ static void check_verdict(const void *data, int32_t size, int64_t utime) {
 static void check_timing(const void *data, int32_t size, int64_t utime) {
     sfd_timing_t t;
     FZ_CHECK(sfd_timing_t_decode(data, 0, size, &t) == size);
-    FZ_CHECK(g_chk.timing_expected); /* follows its frame's verdict */
-    g_chk.timing_expected = 0;
-    FZ_CHECK(t.utime == g_chk.last_verdict_utime && utime == t.utime);
-    FZ_CHECK(t.features_in == g_chk.last_verdict_features);
-    FZ_CHECK(t.ingest_us >= 0 && t.parity_us >= 0 && t.total_us >= 0);
+    FZ_CHECK(t.frame_processed == 0 || t.frame_processed == 1);
+    if (t.frame_processed) {
+        FZ_CHECK(g_chk.timing_expected); /* follows its frame's verdict */
+        g_chk.timing_expected = 0;
+        FZ_CHECK(t.utime == g_chk.last_verdict_utime && utime == t.utime);
+        FZ_CHECK(t.features_in == g_chk.last_verdict_features);
+        FZ_CHECK(t.ingest_us >= 0 && t.parity_us >= 0 && t.total_us >= 0);
+    } else {
+        /* a status report while no frame is judged: no durations, the newest input time */
+        FZ_CHECK(utime == t.utime && t.features_in == 0 && t.total_us == 0);
+    }
+    /* the frame accounting: every frame received is refused, judged or held (at most 2) */
+    const int64_t held = t.frames_in - t.frames_refused - t.frames_processed;
+    FZ_CHECK(held >= 0 && held <= SFD_PIPELINE_FRAME_SLOTS);
+    FZ_CHECK(t.frames_untested >= 0 && t.frames_untested <= t.frames_processed);
     for (int k = 0; k < SFD_TIMING_T_NUM_REASONS; ++k) {
         FZ_CHECK(t.rejected[k] >= g_chk.last_rejected[k]); /* counters only grow */
         g_chk.last_rejected[k] = t.rejected[k];
@@ -138,7 +148,7 @@ static int fz_frames_held(const sfd_node_t *n) {
 }
 
 /* Counters as a flat array, for the monotonicity check. */
-enum { FZ_NCOUNT = SFD_REJECT_NUM_REASONS + 5 };
+enum { FZ_NCOUNT = SFD_REJECT_NUM_REASONS + 6 };
 static void counters_flat(const sfd_node_counters_t *c, int64_t out[FZ_NCOUNT]) {
     for (int k = 0; k < SFD_REJECT_NUM_REASONS; ++k) out[k] = c->rejected[k];
     out[SFD_REJECT_NUM_REASONS + 0] = c->frames_in;
@@ -146,6 +156,7 @@ static void counters_flat(const sfd_node_counters_t *c, int64_t out[FZ_NCOUNT]) 
     out[SFD_REJECT_NUM_REASONS + 2] = c->frames_untested;
     out[SFD_REJECT_NUM_REASONS + 3] = c->imu_in;
     out[SFD_REJECT_NUM_REASONS + 4] = c->camera_info_in;
+    out[SFD_REJECT_NUM_REASONS + 5] = c->frames_refused;
 }
 
 static void check_state(const sfd_node_counters_t *before, int64_t verdicts_before) {
@@ -240,10 +251,14 @@ void fz_flush(void) {
 /* --- priming ------------------------------------------------------------------------------ */
 
 int fz_encode_camera_info(uint8_t *buf, int cap, int64_t utime) {
+    return fz_encode_camera_info_id(buf, cap, utime, 0);
+}
+
+int fz_encode_camera_info_id(uint8_t *buf, int cap, int64_t utime, int32_t camera_id) {
     sfd_camera_info_t ci;
     memset(&ci, 0, sizeof ci);
     ci.utime = utime;
-    ci.camera_id = 0;
+    ci.camera_id = camera_id;
     ci.width = 752;
     ci.height = 480;
     ci.fx = 458.654;
@@ -340,10 +355,16 @@ void fz_config_from_byte(uint8_t b, sfd_node_config_t *cfg) {
     const int n = groups[(b >> 6) & 3u];
     cfg->params.window_frames = L < SFD_MAX_WINDOW ? L : SFD_MAX_WINDOW;
     cfg->params.group_size = n < SFD_MAX_GROUP ? n : SFD_MAX_GROUP;
-    if (b & 4u) { /* bits 4 and 5 then pick the filter methods */
-        cfg->params.method = (b & 16u)   ? SFD_METHOD_OPRF
-                             : (b & 32u) ? SFD_METHOD_BOTH
-                                         : SFD_METHOD_NONE;
+    if (b & 4u) { /* bits 4 and 5 then pick the filter methods; 6 and 7 both: the EKF */
+        static const int32_t methods[4] = {SFD_METHOD_NONE, SFD_METHOD_OPRF, SFD_METHOD_BOTH,
+                                           SFD_METHOD_RANSAC1};
+        cfg->params.method = methods[(b >> 4) & 3u];
+        if (cfg->params.method == SFD_METHOD_RANSAC1 && (b & 1u)) {
+            cfg->params.method = SFD_METHOD_RANSACF;
+        }
+        if ((b & 0xC0u) == 0xC0u) cfg->nav.window_filter = 0; /* the single-state EKF */
+    } else if ((b & 0xC0u) == 0xC0u) {
+        cfg->params.translation_known = 1; /* parity with the filter's translation */
     }
     if (b & 8u) cfg->camera_id = 0;
     if (b & 16u) cfg->params.parity_isolation = 0;

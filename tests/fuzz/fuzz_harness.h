@@ -15,6 +15,8 @@
  *  - every published message decodes with LCM's generated code;
  *  - counters only grow (node counters after each call, SFD_TIMING's rejected[] across messages),
  *    each input bumps its own input counter by one, frames_processed counts the verdicts;
+ *  - SFD_TIMING follows its frame's verdict, or is a status report (frame_processed 0, no
+ *    durations); in each, every frame received is refused, judged or held (at most 2);
  *  - once the node follows a camera, it never switches to another.
  */
 #ifndef SFD_FUZZ_HARNESS_H
@@ -58,6 +60,9 @@ int64_t fz_verdicts(void);
 
 /** Encodes sfd-sim's CAMERA_INFO (camera 0, EuRoC-like radtan) into @p buf; returns the size. */
 int fz_encode_camera_info(uint8_t *buf, int cap, int64_t utime);
+
+/** The same calibration for another camera id. */
+int fz_encode_camera_info_id(uint8_t *buf, int cap, int64_t utime, int32_t camera_id);
 /** Encodes an IMU sample at rest (zero rate, gravity on z). */
 int fz_encode_imu(uint8_t *buf, int cap, int64_t utime);
 /** Encodes a frame of @p n features on a fixed grid, track ids 1..n (a static camera). */
