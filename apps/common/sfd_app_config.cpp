@@ -345,7 +345,75 @@ class Reader {
 
 }  // namespace
 
+static bool read_config_impl(const std::string &path, AppConfig *cfg, std::string *error);
+
+// One line: an exception's message may hold line breaks.
+static std::string one_line(std::string m) {
+    for (char &c : m) {
+        if (c == '\n' || c == '\r') c = ' ';
+    }
+    while (!m.empty() && m.back() == ' ') m.pop_back();
+    return m;
+}
+
+// cv::FileStorage throws more than cv::Exception on some malformed files (std::length_error,
+// found by fuzz.config): any exception is a refused file, never a crash.
 bool read_config(const std::string &path, AppConfig *cfg, std::string *error) {
+    try {
+        return read_config_impl(path, cfg, error);
+    } catch (const cv::Exception &e) {
+        *error = path + ": not valid YAML (" + one_line(e.msg) + ")";
+    } catch (const std::exception &e) {
+        *error = path + ": not valid YAML (" + one_line(e.what()) + ")";
+    } catch (...) {
+        *error = path + ": not valid YAML (unknown error)";
+    }
+    return false;
+}
+
+// The configuration is the small subset of YAML that apps/config/sfd.yaml uses. Every line is
+// blank, a comment, the "%YAML:1.0" / "---" header, or "KEY:" / "KEY: VALUE" (KEY a name of
+// letters, digits and '_', any indentation; lists are written [a, b, c]), in printable ASCII
+// (tabs and, in comments, UTF-8 allowed). Anything else is refused here, before cv::FileStorage
+// sees it: fuzz.config found small files on which cv::FileStorage::open never returns (a
+// "--/-" line after a key; "-" list items below an indented key).
+static bool config_lines_ok(const std::string &path, std::string *error) {
+    std::ifstream in(path, std::ios::binary);
+    std::string line;
+    int n = 0;
+    while (std::getline(in, line)) {
+        ++n;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        const auto bad = [&](const char *why) {
+            *error = path + ":" + std::to_string(n) + ": " + why;
+            return false;
+        };
+        size_t i = line.find_first_not_of(" \t");
+        if (i == std::string::npos) continue;  // blank
+        const bool comment = line[i] == '#';
+        for (size_t k = 0; k < line.size(); ++k) {
+            const unsigned char c = static_cast<unsigned char>(line[k]);
+            if (c == '\t' || (c >= 0x20 && c < 0x7f) || (comment && k > i && c >= 0x80)) continue;
+            return bad("a control character or a non-ASCII byte outside a comment");
+        }
+        if (comment) continue;
+        if (n <= 2 && (line == "%YAML:1.0" || line == "%YAML 1.0" || line == "---")) continue;
+        size_t k = i;
+        while (k < line.size() &&
+               (std::isalnum(static_cast<unsigned char>(line[k])) || line[k] == '_')) {
+            ++k;
+        }
+        if (k == i || std::isdigit(static_cast<unsigned char>(line[i])) || k >= line.size() ||
+            line[k] != ':' || (k + 1 < line.size() && line[k + 1] != ' ' && line[k + 1] != '\t')) {
+            return bad(
+                "not a 'key: value' line (the configuration is the YAML subset of "
+                "apps/config/sfd.yaml)");
+        }
+    }
+    return true;
+}
+
+static bool read_config_impl(const std::string &path, AppConfig *cfg, std::string *error) {
     // Checked here first: cv::FileStorage would log its own line on stderr besides the reason.
     struct stat st;
     if (stat(path.c_str(), &st) != 0) {
@@ -360,6 +428,11 @@ bool read_config(const std::string &path, AppConfig *cfg, std::string *error) {
         *error = path + ": cannot open for reading";
         return false;
     }
+    if (st.st_size == 0) {  // cv::FileStorage asserts on an empty buffer
+        *error = path + ": empty file, not a YAML configuration";
+        return false;
+    }
+    if (!config_lines_ok(path, error)) return false;
     cv::FileStorage fs;
     try {
         if (!fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML)) {
@@ -374,7 +447,7 @@ bool read_config(const std::string &path, AppConfig *cfg, std::string *error) {
             *error = path + ":" + e.func.substr(path.size() + 1, close - path.size() - 1) +
                      ": not valid YAML (" + e.func.substr(close + 3) + ")";
         } else {
-            *error = path + ": not valid YAML (" + e.msg + ")";
+            *error = path + ": not valid YAML (" + one_line(e.msg) + ")";
         }
         return false;
     }

@@ -462,6 +462,25 @@ void file_values_are_named(void **) {
     expect_equal(err, "/tmp: not a regular file", "a directory");
     expect_equal(file_error("seed: 1\ngyro_bias_rad_s: [ 1"),
                  "F:4: not valid YAML (Missing , between the elements)", "not YAML");
+    // outside the YAML subset of sfd.yaml: refused before cv::FileStorage, which never returns
+    // on these two (found by fuzz.config), and a control byte
+    const std::string subset =
+        ": not a 'key: value' line (the configuration is the YAML subset of apps/config/sfd.yaml)";
+    expect_equal(file_error("   gravity_m_s2: 9.81\n   # c\n-\n-"), "F:5" + subset,
+                 "block list items (a cv::FileStorage hang)");
+    expect_equal(file_error("# c\n   f%%irst qL:1.0\n--/-"), "F:4" + subset,
+                 "a key with '%' (a cv::FileStorage hang)");
+    expect_equal(file_error("seed: 1\x01"),
+                 "F:3: a control character or a non-ASCII byte outside a comment", "control byte");
+    expect_equal(file_error("# \xc3\xa9t\xc3\xa9\nseed: 1"), "", "UTF-8 in a comment");
+    // an empty file (cv::FileStorage asserts on it, with a two-line message)
+    char empty[] = "/tmp/sfd_test_app_config_XXXXXX";
+    const int fd = mkstemp(empty);
+    assert_true(fd >= 0);
+    close(fd);
+    assert_false(sfdapp::read_config(empty, &c2, &err));
+    expect_equal(err, std::string(empty) + ": empty file, not a YAML configuration", "empty");
+    std::remove(empty);
 }
 
 // GIVEN load_config() (read_config() then validate(), for sfd-hil, which overrides no key) THEN
