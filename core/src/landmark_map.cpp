@@ -268,6 +268,27 @@ sfd_status_t acquire_entry(sfd_landmark_map_t *map, int64_t track_id, int64_t ut
     return SFD_OK;
 }
 
+// A track's new landmark (its entry from acquire_entry): position, covariance (row-major), one
+// observation, seen at utime; `fixed` for a known point (sfd_landmark_set).
+sfd_status_t store_landmark(sfd_landmark_map_t *map, int64_t track_id, const double p[3],
+                            const double cov_m2[9], int64_t utime, uint8_t fixed,
+                            int32_t *index_out) {
+    int32_t e = -1;
+    const sfd_status_t ae = acquire_entry(map, track_id, utime, &e);
+    if (ae != SFD_OK) return ae;
+    sfd_landmark_t &l = map->entries[e];
+    std::memset(&l, 0, sizeof(l));
+    l.track_id = track_id;
+    for (int k = 0; k < 3; ++k) l.p_W_m[k] = p[k];
+    std::memcpy(l.cov_m2, cov_m2, sizeof(l.cov_m2));
+    l.last_seen_utime = utime;
+    l.observations = 1;
+    l.used = 1U;
+    l.fixed = fixed;
+    if (index_out != nullptr) *index_out = e;
+    return SFD_OK;
+}
+
 bool usable_entry(const sfd_landmark_map_t &map, int32_t index) {
     return entry_in_range(index) && map.entries[index].used == 1U;
 }
@@ -340,20 +361,10 @@ extern "C" sfd_status_t sfd_landmark_init_from_ray(sfd_landmark_map_t *map, int6
     C = sym(C);
     if (!all_finite(p.data(), 3) || !all_finite(C.data(), 9)) return SFD_ERR_NUMERIC;
 
-    int32_t e = -1;
-    const sfd_status_t ae = acquire_entry(map, track_id, utime, &e);
-    if (ae != SFD_OK) return ae;
-    sfd_landmark_t &l = map->entries[e];
-    std::memset(&l, 0, sizeof(l));
-    l.track_id = track_id;
-    for (int k = 0; k < 3; ++k) l.p_W_m[k] = p(k);
-    Eigen::Map<Mat3> Cm(l.cov_m2);
+    double Cr[9];  // row-major, as the entry stores it
+    Eigen::Map<Mat3> Cm(Cr);
     Cm = C;
-    l.last_seen_utime = utime;
-    l.observations = 1;
-    l.used = 1U;
-    if (index_out != nullptr) *index_out = e;
-    return SFD_OK;
+    return store_landmark(map, track_id, p.data(), Cr, utime, 0U, index_out);
 }
 
 extern "C" sfd_status_t sfd_landmark_set(sfd_landmark_map_t *map, int64_t track_id,
@@ -378,20 +389,7 @@ extern "C" sfd_status_t sfd_landmark_set(sfd_landmark_map_t *map, int64_t track_
     const double m3 = C[0] * (C[4] * C[8] - C[5] * C[7]) - C[1] * (C[3] * C[8] - C[5] * C[6]) +
                       C[2] * (C[3] * C[7] - C[4] * C[6]);
     if (!(m1 > 0.0 && m2 > 0.0 && m3 > 0.0)) return SFD_ERR_INVAL;
-    int32_t e = -1;
-    const sfd_status_t ae = acquire_entry(map, track_id, utime, &e);
-    if (ae != SFD_OK) return ae;
-    sfd_landmark_t &l = map->entries[e];
-    std::memset(&l, 0, sizeof(l));
-    l.track_id = track_id;
-    for (int k = 0; k < 3; ++k) l.p_W_m[k] = p_W_m[k];
-    std::memcpy(l.cov_m2, C, sizeof(C));
-    l.last_seen_utime = utime;
-    l.observations = 1;
-    l.used = 1U;
-    l.fixed = 1U;
-    if (index_out != nullptr) *index_out = e;
-    return SFD_OK;
+    return store_landmark(map, track_id, p_W_m, C, utime, 1U, index_out);
 }
 
 extern "C" sfd_status_t sfd_landmark_refine(sfd_landmark_map_t *map, int32_t index,
