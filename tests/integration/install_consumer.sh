@@ -18,6 +18,7 @@ test -f "$tmp/prefix/etc/sfd/sfd.yaml"
 grep -q "^ExecStart=$tmp/prefix/bin/sfd-node --config $tmp/prefix/etc/sfd/sfd.yaml --sched-fifo 50 --lock-memory$" \
   "$tmp/prefix/share/sfd/sfd-node.service"
 test -f "$tmp/prefix/share/sfd/deploy.md"
+grep -q "^MIT License" "$tmp/prefix/share/doc/sfd/LICENSE"
 "$tmp/prefix/bin/sfd-node" --help >/dev/null
 # the timing tool, its histogram script and its documentation
 test -x "$tmp/prefix/bin/sfd-hil"
@@ -30,9 +31,17 @@ test -f "$tmp/prefix/share/sfd/hil.md"
 cmake -S "$src/examples/consumer" -B "$tmp/b" -DCMAKE_PREFIX_PATH="$tmp/prefix" >/dev/null
 cmake --build "$tmp/b" >/dev/null
 "$tmp/b/sfd_consumer"
-libdir="$(dirname "$(find "$tmp/prefix" -name sfd.pc | head -1)")"
-flags="$(PKG_CONFIG_PATH="$libdir" pkg-config --define-prefix --cflags --libs --static sfd)"
+# sfd.pc is relocatable (prefix=${pcfiledir}/...): the tree moved elsewhere still resolves,
+# without pkg-config's --define-prefix
+mv "$tmp/prefix" "$tmp/moved"
+pcdir="$(dirname "$(find "$tmp/moved" -name sfd.pc | head -1)")"
+grep -q '^prefix=${pcfiledir}/' "$pcdir/sfd.pc" || { cat "$pcdir/sfd.pc"; echo "sfd.pc: prefix not relative"; exit 1; }
+flags="$(PKG_CONFIG_PATH="$pcdir" pkg-config --dont-define-prefix --cflags --libs --static sfd)"
+case "$flags" in
+  *"$tmp/moved/"*) ;;
+  *) echo "install_consumer: pkg-config flags do not point into the moved tree: $flags"; exit 1 ;;
+esac
 # shellcheck disable=SC2086
 cc -o "$tmp/consumer_pc" "$src/examples/consumer/main.c" $flags
 "$tmp/consumer_pc"
-echo "install_consumer: find_package(sfd) and pkg-config consumers built and ran"
+echo "install_consumer: find_package(sfd) and a relocated pkg-config (sfd.pc) consumer built and ran"
