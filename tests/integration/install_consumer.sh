@@ -44,4 +44,18 @@ esac
 # shellcheck disable=SC2086
 cc -o "$tmp/consumer_pc" "$src/examples/consumer/main.c" $flags
 "$tmp/consumer_pc"
+# a consumer compiled with other capacities than the installed library's is a compile error
+# naming the capacity (it used to build, then crash in sfd_parity_init)
+for def in SFD_MAX_FEATURES=512 SFD_MAX_WINDOW=4 SFD_IMU_RING_CAPACITY=1024; do
+  # shellcheck disable=SC2086
+  if cc -D"$def" -o "$tmp/consumer_bad" "$src/examples/consumer/main.c" $flags 2> "$tmp/bad.txt"; then
+    echo "install_consumer: -D$def compiled against the installed headers"; exit 1
+  fi
+  grep -q "sfd: ${def%%=*} differs from the installed library's" "$tmp/bad.txt" || {
+    cat "$tmp/bad.txt"; echo "install_consumer: -D$def: no capacity message"; exit 1; }
+done
+# the library's own values are accepted when given explicitly
+# shellcheck disable=SC2086
+cc -DSFD_MAX_FEATURES=256 -DSFD_MAX_LANDMARKS=512 -o "$tmp/consumer_same" \
+  "$src/examples/consumer/main.c" $flags
 echo "install_consumer: find_package(sfd) and a relocated pkg-config (sfd.pc) consumer built and ran"
