@@ -1,5 +1,10 @@
 // SPDX-License-Identifier: MIT
 #include "core_private.hpp"
+#include "sfd/sfd_version.h"
+
+extern "C" uint32_t sfd_version(void) {
+    return static_cast<uint32_t>(SFD_VERSION);
+}
 
 extern "C" const char *sfd_status_str(sfd_status_t status) {
     switch (status) {

@@ -1,11 +1,17 @@
 /* SPDX-License-Identifier: MIT */
-/* Smallest use of the installed core from C: parameters, the chi-square threshold, the seeded
- * PRNG, and the eq. (27) hypothesis count. Prints them and exits 0 when every call succeeded. */
+/* Smallest use of the installed core from C: the library's version against the headers',
+ * parameters, the chi-square threshold, the seeded PRNG, and the eq. (27) hypothesis count.
+ * Prints them and exits 0 when every call succeeded. */
 #include <stdio.h>
 
 #include <sfd/sfd.h>
 
 int main(void) {
+    if (sfd_version() != SFD_VERSION) { /* a library that is not the headers' */
+        fprintf(stderr, "sfd: library %u.%u, headers %d.%d\n", (unsigned)(sfd_version() >> 16),
+                (unsigned)(sfd_version() & 0xFFFFu), SFD_VERSION_MAJOR, SFD_VERSION_MINOR);
+        return 1;
+    }
     sfd_params_t p;
     if (sfd_params_default(&p) != SFD_OK || sfd_params_validate(&p) != SFD_OK) return 1;
     double thr = 0.0;

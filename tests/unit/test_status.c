@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include <sfd/sfd_status.h>
+#include <sfd/sfd_version.h>
 
 /* GIVEN each defined code WHEN asking its name THEN the name is the enumerator's spelling. */
 static void status_str_known_codes_named(void **state) {
@@ -37,11 +38,21 @@ static void status_errors_negative(void **state) {
     for (size_t i = 0; i < sizeof errs / sizeof errs[0]; ++i) assert_true(errs[i] < 0);
 }
 
+/* GIVEN the library THEN sfd_version() is the SFD_VERSION of the headers it was built with (here
+ * the same headers): 0.1 as (major << 16) | minor. */
+static void library_version_is_the_headers(void **state) {
+    (void)state;
+    assert_int_equal(sfd_version(), SFD_VERSION);
+    assert_int_equal(sfd_version() >> 16, SFD_VERSION_MAJOR);
+    assert_int_equal(sfd_version() & 0xFFFFu, SFD_VERSION_MINOR);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(status_str_known_codes_named),
         cmocka_unit_test(status_str_unknown_code_not_null),
         cmocka_unit_test(status_errors_negative),
+        cmocka_unit_test(library_version_is_the_headers),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

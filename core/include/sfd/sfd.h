@@ -10,9 +10,7 @@
 #ifndef SFD_H
 #define SFD_H
 
-#define SFD_VERSION_MAJOR 0
-#define SFD_VERSION_MINOR 1
-#define SFD_VERSION ((SFD_VERSION_MAJOR << 16) | SFD_VERSION_MINOR)
+#include "sfd_version.h"
 
 #include "sfd_camera.h"
 #include "sfd_chi2.h"
