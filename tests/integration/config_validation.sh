@@ -24,14 +24,15 @@ fails=0
 fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
 
 # --- the shipped configuration ----------------------------------------------------------------
-"$replay" "$golden" -o plain.lcmlog --summary plain.json > /dev/null
-"$replay" "$golden" --config shipped.yaml -o conf.lcmlog --summary conf.json > /dev/null ||
+timeout -k 5 60 "$replay" "$golden" -o plain.lcmlog --summary plain.json > /dev/null
+timeout -k 5 60 "$replay" "$golden" --config shipped.yaml -o conf.lcmlog --summary conf.json \
+  > /dev/null ||
   fail "sfd-replay refuses the shipped sfd.yaml"
 cmp -s plain.lcmlog conf.lcmlog && cmp -s plain.json conf.json ||
   fail "the shipped sfd.yaml (which states the defaults) changes sfd-replay's output"
 # memq://: LCM inside the process (no network); SIGINT after 1 s is a clean stop (exit 0).
 rc=0
-timeout --preserve-status -s INT 1 "$node" --config shipped.yaml --lcm-url memq:// \
+timeout -k 5 --preserve-status -s INT 1 "$node" --config shipped.yaml --lcm-url memq:// \
   > node_ok.txt 2>&1 || rc=$?
 [ "$rc" -eq 0 ] || fail "sfd-node with the shipped sfd.yaml: exit $rc: $(cat node_ok.txt)"
 grep -q "sfd-node: stopped" node_ok.txt || fail "sfd-node with the shipped sfd.yaml did not run"
@@ -45,7 +46,7 @@ run() {
     timeout 10 "$node" "$@" > node.out 2> node.err || rc=$?
   else
     rm -f out.lcmlog
-    "$replay" "$golden" -o out.lcmlog "$@" > replay.out 2> replay.err || rc=$?
+    timeout -k 5 60 "$replay" "$golden" -o out.lcmlog "$@" > replay.out 2> replay.err || rc=$?
     [ ! -e out.lcmlog ] || fail "sfd-replay $*: left an output"
   fi
 }
@@ -193,10 +194,10 @@ check node '--state-channel: channels.state: "SFD TIMING" contains '"' '"' (a ch
 check node '--lcm-url: lcm_url: "" is empty' --lcm-url "" && echo "exit 2: --lcm-url ''"
 
 # --- a flag that repairs the file: judged after the overrides -----------------------------------
-"$replay" "$golden" --config method.yaml --method parity > /dev/null 2> replay.err ||
+timeout -k 5 60 "$replay" "$golden" --config method.yaml --method parity > /dev/null 2> replay.err ||
   fail "sfd-replay --config method.yaml --method parity: $(cat replay.err)"
 rc=0
-timeout --preserve-status -s INT 1 "$node" --config method.yaml --method parity \
+timeout -k 5 --preserve-status -s INT 1 "$node" --config method.yaml --method parity \
   --lcm-url memq:// > node.out 2>&1 || rc=$?
 [ "$rc" -eq 0 ] || fail "sfd-node --config method.yaml --method parity: exit $rc: $(cat node.out)"
 
