@@ -38,7 +38,27 @@ const char *const kMethodList = "none, parity, oprf, ransac1, ransacf, both";
 constexpr double kMaxMicros = 9.0e15;
 
 std::string quoted(const std::string &s) {
-    return "\"" + s + "\"";
+    // A message is one line: control characters (a YAML "\n" escape gives a real line break)
+    // are written as escapes.
+    std::string q = "\"";
+    for (const char c : s) {
+        const unsigned char u = static_cast<unsigned char>(c);
+        if (c == '\n') {
+            q += "\\n";
+        } else if (c == '\r') {
+            q += "\\r";
+        } else if (c == '\t') {
+            q += "\\t";
+        } else if (u < 0x20 || u == 0x7f) {
+            static const char kHex[] = "0123456789abcdef";
+            q += "\\x";
+            q += kHex[u >> 4];
+            q += kHex[u & 15u];
+        } else {
+            q += c;
+        }
+    }
+    return q + "\"";
 }
 
 }  // namespace
@@ -330,7 +350,9 @@ class Reader {
         for (const std::string &key : map.keys()) {
             if (known.count(key) == 0) {
                 *error_ = path_;
-                error_->append(": unknown key ").append(prefix).append(key);
+                const std::string q = quoted(key);  // one line, whatever the key holds
+                const bool plain = q.size() == key.size() + 2 && q.compare(1, key.size(), key) == 0;
+                error_->append(": unknown key ").append(prefix).append(plain ? key : q);
                 return false;
             }
         }
@@ -674,9 +696,12 @@ class Checker {
             for (const char c : name) {
                 if (std::string(".[]{}()*+?^$|\\").find(c) != std::string::npos ||
                     std::isgraph(static_cast<unsigned char>(c)) == 0) {
+                    std::string q = quoted(std::string(1, c));  // escaped, one line
+                    q.front() = '\'';
+                    q.back() = '\'';
                     fail(key, quoted(name),
-                         std::string("contains '") + c +
-                             "' (a channel name is matched exactly: no blanks, control or "
+                         "contains " + q +
+                             " (a channel name is matched exactly: no blanks, control or "
                              "regular-expression characters)");
                     return;
                 }

@@ -473,6 +473,13 @@ void file_values_are_named(void **) {
     expect_equal(file_error("seed: 1\x01"),
                  "F:3: a control character or a non-ASCII byte outside a comment", "control byte");
     expect_equal(file_error("# \xc3\xa9t\xc3\xa9\nseed: 1"), "", "UTF-8 in a comment");
+    // a YAML escape that makes a line break in a value, or in a key, stays one line in the
+    // message (found by fuzz.config)
+    const std::string nl = file_error("channels:\n   imu: \"a\\nb\"");
+    assert_true(nl.find('\n') == std::string::npos);
+    assert_true(nl.find("channels.imu: \"a\\nb\"") != std::string::npos);
+    const std::string nk = file_error("filter: { \"a\\nb\": 1 }");
+    expect_equal(nk, "F: unknown key filter.\"a\\nb\"", "an escaped key");
     // an empty file (cv::FileStorage asserts on it, with a two-line message)
     char empty[] = "/tmp/sfd_test_app_config_XXXXXX";
     const int fd = mkstemp(empty);
