@@ -120,7 +120,7 @@ typedef struct {
     int32_t slot_state[SFD_PIPELINE_FRAME_SLOTS];   /**< sfd_pipeline_slot_state_t */
     int32_t slot_reason[SFD_PIPELINE_FRAME_SLOTS];  /**< due: SFD_REJECT_NONE or why no IMU */
     uint32_t slot_seq[SFD_PIPELINE_FRAME_SLOTS];    /**< arrival order */
-    int32_t slot_restart[SFD_PIPELINE_FRAME_SLOTS]; /**< 1: the first frame of a new time base:
+    int32_t slot_restart[SFD_PIPELINE_FRAME_SLOTS]; /**< 1: the first frame of another time base:
                                                         the frame side restarts before it */
     uint32_t next_seq;
     /* the frame being judged */

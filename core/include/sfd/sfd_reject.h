@@ -31,7 +31,7 @@ typedef enum {
     SFD_REJECT_TIME_JUMP = 12,     /**< utime farther than the horizon from its stream (a glitch,
                                         or one of the first messages of a restarted stream) */
     SFD_REJECT_RESTART = 13,       /**< not a message: the pipeline's frame or IMU side restarted
-                                        on a new time base (sfd_time_guard.h) */
+                                        on another time base (sfd_time_guard.h) */
     SFD_REJECT_FEATURE_NONFINITE = 14, /**< features (not frames) with a NaN/Inf pixel coordinate:
                                             kept, never judged (UNTESTED) */
     SFD_REJECT_FEATURE_DUPLICATE = 15, /**< features whose track id came earlier in the frame */

@@ -35,7 +35,7 @@ extern "C" {
 
 typedef struct {
     int64_t horizon_us;      /**< H: farthest a message may lie from its stream, > 0 (500 000) */
-    int32_t resync_messages; /**< N: consistent jumped messages that make a new time base,
+    int32_t resync_messages; /**< N: consistent jumped messages that make another time base,
                                   2..1000 (5) */
 } sfd_time_guard_params_t;
 
@@ -43,7 +43,7 @@ typedef enum {
     SFD_TIME_ACCEPT = 0, /**< in order: use it */
     SFD_TIME_ORDER = 1,  /**< not after the reference, within H: refuse (duplicate, reordered) */
     SFD_TIME_JUMP = 2,   /**< more than H from the stream: refuse (counted in the run) */
-    SFD_TIME_RESYNC = 3  /**< the N-th consistent jumped message: use it as the new time base */
+    SFD_TIME_RESYNC = 3  /**< the N-th consistent jumped message: use it as the next time base */
 } sfd_time_verdict_t;
 
 typedef struct {
