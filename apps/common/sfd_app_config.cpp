@@ -487,6 +487,8 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                                                 "translation_known",
                                                 "exact_depth_covariance",
                                                 "parity_isolation",
+                                                "pixel_noise_adapt",
+                                                "evidence_frames",
                                                 "default_depth_m",
                                                 "default_depth_var_m2",
                                                 "max_imu_gap_us",
@@ -528,6 +530,8 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                 {"translation_known", &p.translation_known},
                 {"exact_depth_covariance", &p.exact_depth_covariance},
                 {"parity_isolation", &p.parity_isolation},
+                {"pixel_noise_adapt", &p.pixel_noise_adapt},
+                {"evidence_frames", &p.evidence_frames},
                 {"max_hypotheses", &p.max_hypotheses}};
     for (const IntKey &k : ints) {
         if (!root[k.name].empty() && !rd.integer(root[k.name], k.name, k.dst)) return false;
@@ -734,6 +738,8 @@ bool validate(const AppConfig &cfg, std::string *error) {
     c.flag("translation_known", p.translation_known);
     c.flag("exact_depth_covariance", p.exact_depth_covariance);
     c.flag("parity_isolation", p.parity_isolation);
+    c.flag("pixel_noise_adapt", p.pixel_noise_adapt);
+    c.integer("evidence_frames", p.evidence_frames, 0, SFD_MAX_WINDOW);
     c.positive("default_depth_m", p.default_depth_m);
     c.non_negative("default_depth_var_m2", p.default_depth_var_m2);
     if (p.max_imu_gap_us <= 0) {

@@ -19,6 +19,8 @@ extern "C" sfd_status_t sfd_params_default(sfd_params_t *p) {
     p->ransac_confidence = 0.99;
     p->max_imu_gap_us = 50000;
     p->seed = 1U;
+    p->pixel_noise_adapt = 1;
+    p->evidence_frames = SFD_MAX_WINDOW;
     return SFD_OK;
 }
 
@@ -42,5 +44,7 @@ extern "C" sfd_status_t sfd_params_validate(const sfd_params_t *p) {
     if (!(p->ransac_confidence > 0.0 && p->ransac_confidence < 1.0)) return SFD_ERR_INVAL;
     if (!sfd::all_finite(p->gyro_bias_rad_s, 3)) return SFD_ERR_INVAL;
     if (p->max_imu_gap_us <= 0) return SFD_ERR_INVAL;
+    if (p->pixel_noise_adapt != 0 && p->pixel_noise_adapt != 1) return SFD_ERR_INVAL;
+    if (p->evidence_frames < 0 || p->evidence_frames > SFD_MAX_WINDOW) return SFD_ERR_INVAL;
     return SFD_OK;
 }

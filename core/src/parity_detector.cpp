@@ -13,6 +13,14 @@ namespace {
 
 constexpr uint32_t kMagic = 0x53464450u;  // "SFDP"
 constexpr int kSlots = SFD_PARITY_HASH_SLOTS;
+// The ring holds the newest SFD_MAX_WINDOW frames whatever L is: the parity window is the newest
+// L of them, the evidence test (window-limited GLR) may reach back further.
+constexpr int kRing = SFD_MAX_WINDOW;
+
+// Ring slot of the frame `back` frames before the newest (0 = newest), back < det.count.
+int ring_index(const sfd_parity_t &det, int back) {
+    return (det.head - back + kRing) % kRing;
+}
 
 int hash_slot(int64_t id) {
     const uint64_t h = static_cast<uint64_t>(id) * 0x9E3779B97F4A7C15ULL;
@@ -350,7 +358,7 @@ __attribute__((noinline)) bool build_window(const sfd_parity_t &det, Window *w) 
     Mat3 R_CttoC0 = Mat3::Identity();
     Vec3 p = Vec3::Zero();
     for (int t = 0; t < L; ++t) {
-        w->fidx[t] = (det.head + 1 + t) % L;
+        w->fidx[t] = ring_index(det, L - 1 - t);
         const sfd_parity_frame_t &fr = det.frames[w->fidx[t]];
         if (t > 0) {
             const Mat3 R_step = Eigen::Map<const Mat3>(fr.R_CtoCprev);
@@ -409,7 +417,8 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
         o.prev = -1;
         o.run = 0;
         o.valid = 0;
-        o.pad_ = 0;
+        o.prior = 0;
+        o.segment = 0;
         const double uv[2] = {f.u_px, f.v_px};
         double J[4];
         bool ok = all_finite(uv, 2) && sfd_camera_undistort(&det->camera, uv, o.xn, J) == SFD_OK &&
@@ -429,8 +438,10 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
                            std::isfinite(f.depth_var_m2) && f.depth_var_m2 >= 0.0;
         o.depth_m = prior ? f.depth_m : det->params.default_depth_m;
         o.depth_var_m2 = prior ? f.depth_var_m2 : det->params.default_depth_var_m2;
+        o.prior = prior ? 1 : 0;
         o.valid = 1;
         o.run = 1;
+        o.segment = 1;
         hash_insert(new_table, f.track_id, static_cast<int16_t>(i));
         if (have_prev) {
             const int p = hash_find(old_table, pf, f.track_id);
@@ -438,10 +449,151 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
                 o.prev = static_cast<int16_t>(p);
                 o.run = static_cast<int16_t>(pf.obs[p].run >= SFD_MAX_WINDOW ? SFD_MAX_WINDOW
                                                                              : pf.obs[p].run + 1);
+                o.segment = static_cast<int16_t>(
+                    pf.obs[p].segment >= SFD_MAX_WINDOW ? SFD_MAX_WINDOW : pf.obs[p].segment + 1);
             }
         }
     }
     det->hash_cur = 1 - det->hash_cur;
+}
+
+// Median of v[0..n) (n >= 1), by a heap sort in place (no recursion, O(n log n)).
+double median_in_place(float *v, int n) {
+    for (int start = n / 2 - 1; start >= 0; --start) {
+        int root = start;
+        for (int guard = 0; guard < 32 && 2 * root + 1 < n; ++guard) {
+            int child = 2 * root + 1;
+            if (child + 1 < n && v[child] < v[child + 1]) ++child;
+            if (!(v[root] < v[child])) break;
+            const float t = v[root];
+            v[root] = v[child];
+            v[child] = t;
+            root = child;
+        }
+    }
+    for (int end = n - 1; end > 0; --end) {
+        const float t = v[0];
+        v[0] = v[end];
+        v[end] = t;
+        int root = 0;
+        for (int guard = 0; guard < 32 && 2 * root + 1 < end; ++guard) {
+            int child = 2 * root + 1;
+            if (child + 1 < end && v[child] < v[child + 1]) ++child;
+            if (!(v[root] < v[child])) break;
+            const float x = v[root];
+            v[root] = v[child];
+            v[child] = x;
+            root = child;
+        }
+    }
+    return (n % 2 == 1) ? static_cast<double>(v[n / 2])
+                        : 0.5 * (static_cast<double>(v[n / 2 - 1]) + static_cast<double>(v[n / 2]));
+}
+
+// Pixel noise scale (core/docs/parity_space.md "Pixel noise scale"): the frame's median of
+// gamma / median(chi2(dof)) is 1 when the pixel noise variance is right; the scale moves a fifth
+// of the way (in log) toward the value that makes it so, from frames with at least 16 tests, and
+// stays within [1/25, 25].
+void update_noise_scale(sfd_parity_t &det, float *u, int n) {
+    if (!det.params.pixel_noise_adapt || n < 16) return;
+    const double m = median_in_place(u, n);
+    if (!(m > 0.0) || !std::isfinite(m)) return;
+    double s = det.noise_scale * std::pow(m, 0.2);
+    s = s < 0.04 ? 0.04 : (s > 25.0 ? 25.0 : s);
+    det.noise_scale = s;
+}
+
+// Loads feature i of the newest frame over its newest m frames into obs (oldest first), with the
+// pixel noise variance scaled by `scale`; the depth prior is the newest observation's.
+void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_test_obs_t *obs) {
+    obs->frames = m;
+    int index = i;
+    for (int t = m - 1; t >= 0; --t) {
+        const sfd_parity_frame_t &fr = det.frames[ring_index(det, m - 1 - t)];
+        const sfd_parity_obs_t &o = fr.obs[index];
+        obs->utime[t] = fr.utime;
+        obs->xn[t][0] = o.xn[0];
+        obs->xn[t][1] = o.xn[1];
+        for (int c = 0; c < 3; ++c) obs->cov_xn[t][c] = scale * o.cov_xn[c];
+        index = o.prev;
+    }
+    const sfd_parity_obs_t &newest = det.frames[det.head].obs[i];
+    obs->depth_m = newest.prior ? newest.depth_m : 0.0;
+    obs->depth_var_m2 = newest.prior ? newest.depth_var_m2 : 0.0;
+}
+
+// Known translation from the window filter (sfd_parity_push_frame_filter; core/docs/
+// parity_space.md "Known translation from the window filter"). Every feature tracked through the
+// L frames is tested alone with the filter's poses and covariance (sfd_window_test_track). Then
+// the evidence test: a feature whose window passed and whose segment (its observations since
+// its last alarm) is longer than L is tested again over min(segment, evidence_frames) frames, a
+// window-limited GLR that sees a slow drift or a moving point the L-frame window absorbs. With
+// it each test runs at alpha / 2, so a clean feature is flagged with probability <= alpha.
+// False when the filter does not hold the window's frames (nothing written: the caller falls
+// back to the group test).
+__attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t *filter,
+                                                const sfd_extrinsics_t &ext, sfd_verdict_t *out) {
+    const int L = det.params.window_frames;
+    // The filter must hold the window: its newest L - 1 clones at the window's older frames and
+    // its state at the newest frame's time (sfd_window_test_track checks every test's frames).
+    if (!filter->started || filter->num_clones < L - 1) return false;
+    for (int back = 0; back < L; ++back) {
+        const int64_t ft = det.frames[ring_index(det, back)].utime;
+        const int64_t wt =
+            (back == 0) ? filter->utime : filter->clones[filter->num_clones - back].utime;
+        if (ft != wt) return false;
+    }
+    // How far back the filter's clones match the ring (the evidence test's longest window).
+    int m_max = L;
+    const int want = det.params.evidence_frames;
+    while (m_max < want && m_max < det.count && m_max <= filter->num_clones &&
+           det.frames[ring_index(det, m_max)].utime ==
+               filter->clones[filter->num_clones - m_max].utime) {
+        ++m_max;
+    }
+    const bool evidence = want > L;
+    const sfd_chi2_table_t &tab = evidence ? det.chi2_half : det.chi2;
+    sfd_parity_frame_t &nf = det.frames[det.head];
+    const double scale = det.params.pixel_noise_adapt ? det.noise_scale : 1.0;
+    float *u = det.stat_scratch;  // gamma over the median of chi2(dof), per tested feature
+    int n_u = 0;
+    sfd_window_test_obs_t obs;
+    for (int i = 0; i < nf.num; ++i) {
+        sfd_parity_obs_t &newest = nf.obs[i];
+        if (!newest.valid || newest.run < L) continue;
+        load_track(det, i, L, scale, &obs);
+        double gamma = 0.0;
+        int32_t dof = 0;
+        sfd_feature_result_t *v = &out->features[i];
+        sfd_status_t st = sfd_window_test_track(filter, &ext, &obs, &gamma, &dof);
+        if (st != SFD_OK || dof < 1 || dof > SFD_PARITY_MAX_RESIDUAL) {
+            v->reason = (st == SFD_ERR_NUMERIC) ? SFD_REASON_RANK : SFD_REASON_NUMERIC;
+            continue;
+        }
+        double thr = tab.threshold[dof];
+        u[n_u++] = static_cast<float>(gamma / det.chi2_median.threshold[dof]);
+        if (gamma > thr) {
+            set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_FEATURE_TEST, dof, gamma, thr);
+            v->fault_kind = SFD_FAULT_UNKNOWN;
+            out->flags |= SFD_FLAG_PARITY_ALARM;
+            newest.segment = 1;  // an alarm: the track's segment starts again here
+            continue;
+        }
+        set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, dof, gamma, thr);
+        const int m = newest.segment < m_max ? newest.segment : m_max;
+        if (!evidence || m <= L) continue;
+        load_track(det, i, m, scale, &obs);
+        st = sfd_window_test_track(filter, &ext, &obs, &gamma, &dof);
+        if (st != SFD_OK || dof < 1 || dof > SFD_PARITY_MAX_RESIDUAL) continue;
+        thr = tab.threshold[dof];
+        if (gamma > thr) {
+            set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_EVIDENCE, dof, gamma, thr);
+            v->fault_kind = SFD_FAULT_DRIFT;
+            out->flags |= SFD_FLAG_PARITY_ALARM;
+        }
+    }
+    update_noise_scale(det, u, n_u);
+    return true;
 }
 
 }  // namespace
@@ -465,6 +617,11 @@ extern "C" sfd_status_t sfd_parity_init(sfd_parity_t *det, const sfd_params_t *p
     if (c != SFD_OK) return c;
     const sfd_status_t t = sfd_chi2_table_init(&det->chi2, params->false_alarm_rate);
     if (t != SFD_OK) return t;
+    const sfd_status_t tm = sfd_chi2_table_init(&det->chi2_median, 0.5);
+    if (tm != SFD_OK) return tm;
+    const sfd_status_t th = sfd_chi2_table_init(&det->chi2_half, 0.5 * params->false_alarm_rate);
+    if (th != SFD_OK) return th;
+    det->noise_scale = 1.0;
     det->params = *params;
     det->camera = cam;
     det->head = 0;
@@ -504,7 +661,16 @@ extern "C" sfd_status_t sfd_parity_newest_xn(const sfd_parity_t *det, int64_t ut
 extern "C" sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
                                               const sfd_frame_motion_t *motion,
                                               sfd_verdict_t *out) {
+    return sfd_parity_push_frame_filter(det, frame, motion, nullptr, nullptr, out);
+}
+
+extern "C" sfd_status_t sfd_parity_push_frame_filter(sfd_parity_t *det, const sfd_frame_t *frame,
+                                                     const sfd_frame_motion_t *motion,
+                                                     sfd_window_t *filter,
+                                                     const sfd_extrinsics_t *ext,
+                                                     sfd_verdict_t *out) {
     if (det == nullptr || frame == nullptr || out == nullptr) return SFD_ERR_INVAL;
+    if (filter != nullptr && ext == nullptr) return SFD_ERR_INVAL;
     if (det->magic_ != kMagic) return SFD_ERR_STATE;
     if (frame->num_features < 0 || frame->num_features > SFD_MAX_FEATURES) {
         return SFD_ERR_CAPACITY;
@@ -527,14 +693,18 @@ extern "C" sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame
     out->num_consistent = out->num_spurious = out->num_untested = 0;
     out->groups_tested = out->groups_failed = 0;
 
-    const int slot = (det->count == 0) ? 0 : (det->head + 1) % L;
+    const int slot = (det->count == 0) ? 0 : (det->head + 1) % kRing;
     ingest(det, frame, motion, slot, out);
     det->head = slot;
-    if (det->count < L) det->count++;
+    if (det->count < kRing) det->count++;
 
+    const bool want_filter = det->params.translation_known != 0 && filter != nullptr;
     if (det->count < L) {
         out->flags |= SFD_FLAG_WINDOW_FILLING;
+    } else if (want_filter && test_with_filter(*det, filter, *ext, out)) {
+        // every feature of the window tested alone (known translation from the filter)
     } else {
+        if (want_filter) out->flags |= SFD_FLAG_TRANSLATION_UNKNOWN;
         Window w;
         if (!build_window(*det, &w)) {
             for (int i = 0; i < frame->num_features; ++i) {

@@ -53,6 +53,8 @@ void sfd_pipeline_config_default(sfd_pipeline_config_t *cfg) {
     if (cfg == NULL) return;
     memset(cfg, 0, sizeof *cfg);
     sfd_params_default(&cfg->params);
+    /* the pipeline runs the window filter: parity takes the translation from it (Section III-A) */
+    cfg->params.translation_known = 1;
     sfd_nav_config_default(&cfg->nav);
     sfd_time_guard_params_default(&cfg->time);
 }
@@ -417,7 +419,10 @@ static void run_parity(sfd_pipeline_t *p, const sfd_frame_t *frame, int imu_reas
         if (reason == SFD_REJECT_NONE) {
             mp = &motion;
             motion.translation_known = 0;
-            if (p->cfg.params.translation_known && filter_runs && p->nav.have_prev) {
+            /* the single-state EKF: its translation between the two frames, taken as exact; the
+             * window filter gives its poses and their covariance to the test instead (below) */
+            if (p->cfg.params.translation_known && filter_runs && p->nav.have_prev &&
+                !p->cfg.nav.window_filter) {
                 filter_translation(&p->nav, &motion);
             }
         }
@@ -427,7 +432,10 @@ static void run_parity(sfd_pipeline_t *p, const sfd_frame_t *frame, int imu_reas
         sfd_pipeline_count_reject(p, reason);
         sfd_parity_reset(&p->parity);
     }
-    if (sfd_parity_push_frame(&p->parity, frame, mp, &p->out.verdict) != SFD_OK) {
+    /* Known translation from the window filter once it runs and was advanced to this frame. */
+    sfd_window_t *win = (p->cfg.nav.window_filter && p->nav_ok) ? &p->nav.win : NULL;
+    if (sfd_parity_push_frame_filter(&p->parity, frame, mp, win, &p->ext, &p->out.verdict) !=
+        SFD_OK) {
         sfd_pipeline_count_reject(p, SFD_REJECT_CORE);
         sfd_parity_reset(&p->parity);
         untested_verdict(&p->out.verdict, frame);

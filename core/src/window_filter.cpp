@@ -250,8 +250,10 @@ Eigen::Matrix<double, 2, 3, Eigen::RowMajor> proj_jacobian(const Vec3 &pc) {
 /// then at most gauss_newton_iterations Gauss-Newton steps on the
 /// whitened reprojection errors plus the depth prior. False when the point is not finite or not
 /// within [min_depth_m, max_depth_m] in front of every clone.
+/// The depth prior is that of observation @p depth_k (the window's tracks: 0, the first; the
+/// detection test, sfd_window_test_track: the newest).
 bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPose *pose,
-                 bool depth_row, Vec3 *p_out) {
+                 bool depth_row, int depth_k, Vec3 *p_out) {
     Mat3 A = Mat3::Zero();
     Vec3 b = Vec3::Zero();
     for (int k = 0; k < t.used; ++k) {
@@ -269,8 +271,8 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
         // The depth prior is a measurement of the point; the rays' point is not, at low parallax
         // (its depth is then set by the pixel noise, and Gauss-Newton from there may stop far
         // from the optimum, which biases the linearization): start from the prior.
-        p = pose[0].p_CinW +
-            pose[0].R_WtoC.transpose() * (t.depth_m * Vec3(t.xn[0][0], t.xn[0][1], 1.0));
+        p = pose[depth_k].p_CinW + pose[depth_k].R_WtoC.transpose() *
+                                       (t.depth_m * Vec3(t.xn[depth_k][0], t.xn[depth_k][1], 1.0));
     } else if (lmin > 1e-6 && std::isfinite(lmin)) {
         p = A.ldlt().solve(b);
     } else {
@@ -293,8 +295,8 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
             g += J.transpose() * W * r;
         }
         if (depth_row) {
-            const Vec3 pc = pose[0].R_WtoC * (p - pose[0].p_CinW);
-            const Vec3 J = pose[0].R_WtoC.row(2).transpose();
+            const Vec3 pc = pose[depth_k].R_WtoC * (p - pose[depth_k].p_CinW);
+            const Vec3 J = pose[depth_k].R_WtoC.row(2).transpose();
             H += J * J.transpose() / var_d;
             g += J * (t.depth_m - pc.z()) / var_d;
         }
@@ -342,7 +344,7 @@ TrackOutcome process_track(sfd_window_t *w, const sfd_window_track_t &t,
     }
     const bool depth_row = w->prm.use_depth_prior && t.depth_m > 0.0 && std::isfinite(t.depth_m);
     Vec3 pf;
-    if (!triangulate(*w, t, cur, depth_row, &pf)) return TrackOutcome::kNoGeometry;
+    if (!triangulate(*w, t, cur, depth_row, 0, &pf)) return TrackOutcome::kNoGeometry;
 
     sfd_msckf_track_t &tr = w->scratch_track;
     const int n = dim(*w);
@@ -861,4 +863,104 @@ extern "C" sfd_status_t sfd_window_position_var(sfd_window_t *w, double var_m2[3
     flush(w);
     for (int k = 0; k < 3; ++k) var_m2[k] = w->P[P_ + k][P_ + k];
     return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
+                                              const sfd_window_test_obs_t *obs, double *gamma,
+                                              int32_t *dof) {
+    if (w == nullptr || ext == nullptr || obs == nullptr || gamma == nullptr || dof == nullptr) {
+        return SFD_ERR_INVAL;
+    }
+    const int m = obs->frames;
+    if (m < 2 || m > SFD_MAX_WINDOW) return SFD_ERR_INVAL;
+    if (!w->started || w->num_clones < m - 1) return SFD_ERR_STATE;
+    // The frames are the newest m - 1 clones and the current state, at the caller's times.
+    const int c0 = w->num_clones - (m - 1);
+    for (int k = 0; k + 1 < m; ++k) {
+        if (w->clones[c0 + k].utime != obs->utime[k]) return SFD_ERR_STATE;
+    }
+    if (w->utime != obs->utime[m - 1]) return SFD_ERR_STATE;
+    sfd_window_track_t t;
+    std::memset(&t, 0, sizeof t);
+    t.used = m;
+    for (int k = 0; k < m; ++k) {
+        if (!all_finite(obs->xn[k], 2) || !all_finite(obs->cov_xn[k], 3)) return SFD_ERR_INVAL;
+        Mat2 Winv;
+        if (!inv2(obs->cov_xn[k], &Winv)) return SFD_ERR_INVAL;
+        t.xn[k][0] = obs->xn[k][0];
+        t.xn[k][1] = obs->xn[k][1];
+        for (int e = 0; e < 3; ++e) t.cov_xn[k][e] = obs->cov_xn[k][e];
+    }
+    const bool depth_row = w->prm.use_depth_prior && std::isfinite(obs->depth_m) &&
+                           obs->depth_m > 0.0 && std::isfinite(obs->depth_var_m2) &&
+                           obs->depth_var_m2 >= 0.0;
+    t.depth_m = depth_row ? obs->depth_m : 0.0;
+    t.depth_var_m2 = depth_row ? obs->depth_var_m2 : 0.0;
+    flush(w);
+    CamPose pose[SFD_MAX_WINDOW];
+    Vec3 p_I[SFD_MAX_WINDOW];
+    Mat3 R_I[SFD_MAX_WINDOW];
+    int col[SFD_MAX_WINDOW][2];  // columns of (dp, dtheta) of each frame's IMU pose in P
+    for (int k = 0; k < m; ++k) {
+        const bool cur = (k == m - 1);
+        const double *q = cur ? w->q_ItoW : w->clones[c0 + k].q_ItoW;
+        R_I[k] = quat_rot(q);
+        p_I[k] = v3(cur ? w->p_IinW_m : w->clones[c0 + k].p_IinW_m);
+        pose[k] = cam_pose(R_I[k], p_I[k], *ext);
+        col[k][0] = cur ? P_ : kImu + 6 * (c0 + k);
+        col[k][1] = cur ? TH : kImu + 6 * (c0 + k) + 3;
+    }
+    const int dk = m - 1;
+    Vec3 pf;
+    if (!triangulate(*w, t, pose, depth_row, dk, &pf)) return SFD_ERR_NUMERIC;
+    sfd_msckf_track_t &tr = w->scratch_track;
+    const int n = dim(*w);
+    const int rows = 2 * m + (depth_row ? 1 : 0);
+    tr.rows = rows;
+    tr.n = n;
+    tr.projected = 0;
+    for (int i = 0; i < rows; ++i) {
+        for (int j = 0; j < n; ++j) tr.Hx[i][j] = 0.0;
+        for (int j = 0; j < rows; ++j) tr.R[i][j] = 0.0;
+    }
+    // Jacobians at the current estimates (a detection test over one window needs the right
+    // covariance, not the consistency treatment of the update): d pc / d dp_I = -R_WtoC,
+    // d pc / d dtheta_I = R_WtoC [p_f - p_I]x, d pc / d p_f = R_WtoC.
+    for (int k = 0; k < m; ++k) {
+        const Vec3 pc = pose[k].R_WtoC * (pf - pose[k].p_CinW);
+        if (!(pc.z() > 1e-6)) return SFD_ERR_NUMERIC;
+        const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> dth = pose[k].R_WtoC * skew(pf - p_I[k]);
+        const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> Jp = proj_jacobian(pc);
+        const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> Hth = Jp * dth;
+        const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> Hf = Jp * pose[k].R_WtoC;
+        for (int a = 0; a < 2; ++a) {
+            const int r = 2 * k + a;
+            for (int j = 0; j < 3; ++j) {
+                tr.Hx[r][col[k][0] + j] = -Hf(a, j);
+                tr.Hx[r][col[k][1] + j] = Hth(a, j);
+                tr.Hf[r][j] = Hf(a, j);
+            }
+        }
+        const std::size_t ru = 2U * static_cast<std::size_t>(k), rv = ru + 1U;
+        tr.r[ru] = t.xn[k][0] - pc.x() / pc.z();
+        tr.r[rv] = t.xn[k][1] - pc.y() / pc.z();
+        tr.R[ru][ru] = t.cov_xn[k][0];
+        tr.R[ru][rv] = t.cov_xn[k][1];
+        tr.R[rv][ru] = t.cov_xn[k][1];
+        tr.R[rv][rv] = t.cov_xn[k][2];
+    }
+    if (depth_row) {
+        const int r = 2 * m;
+        const Vec3 pc = pose[dk].R_WtoC * (pf - pose[dk].p_CinW);
+        const Mat3 dth = pose[dk].R_WtoC * skew(pf - p_I[dk]);
+        for (int j = 0; j < 3; ++j) {
+            tr.Hx[r][col[dk][0] + j] = -pose[dk].R_WtoC(2, j);
+            tr.Hx[r][col[dk][1] + j] = dth(2, j);
+            tr.Hf[r][j] = pose[dk].R_WtoC(2, j);
+        }
+        tr.r[r] = t.depth_m - pc.z();
+        tr.R[r][r] = t.depth_var_m2 + w->prm.depth_var_floor_m2;
+    }
+    if (sfd_msckf_track_project(&tr) != SFD_OK) return SFD_ERR_NUMERIC;
+    return sfd_msckf_track_gate(&tr, &w->P[0][0], gamma, dof);
 }

@@ -14,6 +14,8 @@ static int32_t clamp_i32(int64_t v) {
 void sfd_node_config_default(sfd_node_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
     sfd_params_default(&cfg->params);
+    /* the node runs the window filter: parity takes the translation from it (Section III-A) */
+    cfg->params.translation_known = 1;
     cfg->camera_id = -1;
     cfg->publish_timing = 1;
     sfd_nav_config_default(&cfg->nav);

@@ -7,6 +7,7 @@
  * a rerun gives the same bits. */
 #include "sfd_test.h"
 
+#include <math.h>
 #include <string.h>
 
 #include <sfd/sfd_pipeline.h>
@@ -15,7 +16,11 @@
 static sfd_pipeline_t g_p, g_q;
 static sfd_frame_t g_frame;
 
-enum { NPTS = 60, JUMP_TRACK = 7, JUMP_FRAME = 40 };
+enum { NPTS = 60, JUMP_TRACK = 7, JUMP_FRAME = 40, DRIFT_FIRST = 20, DRIFT_TRACKS = 20 };
+/* Tracks DRIFT_FIRST.. DRIFT_FIRST + DRIFT_TRACKS - 1 slide g_drift_px per frame from frame
+ * g_drift_from on, each in its own direction (18 degrees apart). */
+static int g_drift_from = 1 << 30;
+static double g_drift_px = 0.0;
 static const double kF = 400.0;
 
 static void camera(sfd_camera_t *cam, sfd_extrinsics_t *ext) {
@@ -54,6 +59,12 @@ static void make_frame(sfd_prng_t *rng, int f, sfd_frame_t *fr) {
         ft->u_px = 320.0 + kF * x + 0.5 * sfd_prng_gaussian(rng);
         ft->v_px = 240.0 + kF * y + 0.5 * sfd_prng_gaussian(rng);
         if (i == JUMP_TRACK && f >= JUMP_FRAME) ft->u_px += 15.0;
+        if (i >= DRIFT_FIRST && i < DRIFT_FIRST + DRIFT_TRACKS && f >= g_drift_from) {
+            const double a = 0.314159265358979 * (double)(i - DRIFT_FIRST),
+                         n = f - g_drift_from + 1;
+            ft->u_px += g_drift_px * n * cos(a);
+            ft->v_px += g_drift_px * n * sin(a);
+        }
         ft->depth_m = 4.0 + 4.0 * (double)(i % 7) / 6.0;
         ft->depth_var_m2 = 0.25;
     }
@@ -191,6 +202,10 @@ static void stages_keep_their_order_and_slots_are_bounded(void **state) {
     assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_NONE);
 }
 
+/* Frames at which run_scene's verdict flagged JUMP_TRACK, per stepwise value. */
+static int g_jump_flags[2];
+static int g_jump_flagged_at[2][8];
+
 /* Feeds 4 s of the scene, judging with judge() (stepwise = 0) or the three stages (1). */
 static void run_scene(sfd_pipeline_t *p, int stepwise) {
     start(p);
@@ -213,6 +228,10 @@ static void run_scene(sfd_pipeline_t *p, int stepwise) {
         } else {
             assert_status(sfd_pipeline_judge(p), SFD_OK);
         }
+        const sfd_verdict_t *v = &sfd_pipeline_output(p)->verdict;
+        if (v->features[JUMP_TRACK].status == SFD_VERDICT_SPURIOUS) {
+            g_jump_flagged_at[stepwise][g_jump_flags[stepwise]++ % 8] = f;
+        }
     }
 }
 
@@ -227,7 +246,10 @@ static int same_double(double a, double b) {
  * the state agree bit for bit. At rest (a hovering camera: no parallax, depth priors on every
  * track) the window filter uses the tracks and holds its position within 3 cm over the 3 s after
  * its start (it drifted 6.7 cm when triangulation started from the noise-driven rays' point
- * instead of the depth prior), and its gate refuses the jumped track. */
+ * instead of the depth prior). Parity, with the translation and covariance of the filter, flags
+ * the jumped track in the two windows that straddle the jump (JUMP_FRAME and the next) and
+ * nowhere else, so the filter's gate never sees it (before parity took the filter's translation,
+ * the jump passed parity and the gate refused it). */
 static void judge_equals_the_three_stages_bit_for_bit(void **state) {
     (void)state;
     run_scene(&g_p, 0);
@@ -247,7 +269,11 @@ static void judge_equals_the_three_stages_bit_for_bit(void **state) {
     assert_int_equal(a->has_state, 1);
     for (int k = 0; k < 3; ++k) assert_true(fabs(a->p_IinW_m[k]) < 0.03);
     assert_true(g_p.nav.win_used > 500); /* 60 tracks every 5 frames for 3 s, less the jumped */
-    assert_int_equal(g_p.nav.win_gated, 1);
+    assert_int_equal(g_jump_flags[0], 2);
+    assert_int_equal(g_jump_flagged_at[0][0], JUMP_FRAME);
+    assert_int_equal(g_jump_flagged_at[0][1], JUMP_FRAME + 1);
+    assert_int_equal(g_jump_flags[1], 2);
+    assert_int_equal(g_p.nav.win_gated, 0);
 }
 
 /* Feeds frames f0..f1 of the scene with every time shifted by offset_us (IMU up to each frame
@@ -486,6 +512,104 @@ static void init_refuses_invalid_configurations(void **state) {
     assert_status(sfd_pipeline_judge(NULL), SFD_ERR_INVAL);
 }
 
+/* One run of the hovering scene with pixel_sigma_px 1 px (the scene has 0.5 px) and tracks
+ * DRIFT_FIRST.. sliding drift_px per frame from frame 150: the noise scale, the clean features'
+ * tests and alarms from frame 60 on, and per drifting track the frames to its first flag. */
+typedef struct {
+    double noise_scale;
+    long tests, alarms;
+    int delay[DRIFT_TRACKS]; /* 1 = flagged in the drift's first frame; -1 never (50 frames) */
+    int evidence_flags;
+} drift_run_t;
+
+static void drift_run(double drift_px, drift_run_t *out) {
+    sfd_pipeline_config_t cfg;
+    config(&cfg);
+    cfg.params.pixel_sigma_px = 1.0;
+    assert_int_equal(cfg.params.translation_known, 1);
+    assert_int_equal(cfg.params.pixel_noise_adapt, 1);
+    assert_int_equal(cfg.params.evidence_frames, SFD_MAX_WINDOW);
+    assert_status(sfd_pipeline_init(&g_p, &cfg), SFD_OK);
+    sfd_camera_t cam;
+    sfd_extrinsics_t ext;
+    camera(&cam, &ext);
+    assert_int_equal(sfd_pipeline_set_camera(&g_p, &cam, &ext), SFD_REJECT_NONE);
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 21);
+    g_drift_from = 150;
+    g_drift_px = drift_px;
+    memset(out, 0, sizeof *out);
+    for (int d = 0; d < DRIFT_TRACKS; ++d) out->delay[d] = -1;
+    int k = 0;
+    for (int f = 1; f <= 200; ++f) {
+        make_frame(&rng, f, &g_frame);
+        sfd_imu_sample_t s;
+        do {
+            imu_sample(&rng, ++k, &s);
+            assert_int_equal(sfd_pipeline_push_imu(&g_p, &s), SFD_REJECT_NONE);
+        } while (s.t_us < g_frame.utime);
+        assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_NONE);
+        assert_status(sfd_pipeline_judge(&g_p), SFD_OK);
+        const sfd_verdict_t *v = &sfd_pipeline_output(&g_p)->verdict;
+        for (int i = 0; i < v->num_features; ++i) {
+            const sfd_feature_result_t *r = &v->features[i];
+            if (i == JUMP_TRACK || r->status == SFD_VERDICT_UNTESTED) continue;
+            const int d = i - DRIFT_FIRST;
+            if (d >= 0 && d < DRIFT_TRACKS && f >= g_drift_from) {
+                if (r->status == SFD_VERDICT_SPURIOUS && out->delay[d] < 0) {
+                    out->delay[d] = f - g_drift_from + 1;
+                }
+                out->evidence_flags +=
+                    r->status == SFD_VERDICT_SPURIOUS && r->reason == SFD_REASON_EVIDENCE;
+                continue;
+            }
+            if (f < 60 || r->reason != SFD_REASON_FEATURE_TEST) continue; /* scale settling */
+            out->tests++;
+            out->alarms += r->status == SFD_VERDICT_SPURIOUS;
+        }
+    }
+    g_drift_from = 1 << 30;
+    g_drift_px = 0.0;
+    out->noise_scale = g_p.parity.noise_scale;
+}
+
+/* GIVEN the hovering scene (0.5 px of pixel noise) and a configured pixel_sigma_px of 1 px
+ * WHEN parity runs with the filter's translation THEN its pixel noise scale settles near the
+ * true variance ratio 0.25 (a third of the tracks drifting pulls it up a little); the clean
+ * features' alarm rate is at most alpha (the window test and the evidence test each at
+ * alpha / 2), inside the 99 % binomial interval counted with a third of the tests as
+ * independent (consecutive windows share frames); and of 20 tracks that slide 1 px per frame
+ * (2 sigma, 20 directions) every one is flagged within 5 frames. Slower drifts are printed: the
+ * 5-frame evidence window is too short for 0.3 px per frame at 0.5 px of noise (about a third
+ * within 10 frames), which needs a longer memory per track (issue 17, item 3). */
+static void parity_calibrates_its_pixel_noise_and_sees_a_drift(void **state) {
+    (void)state;
+    const double rates[3] = {0.3, 0.5, 1.0};
+    for (int r = 0; r < 3; ++r) {
+        drift_run_t run;
+        drift_run(rates[r], &run);
+        const double alpha = 0.01, rate = (double)run.alarms / (double)run.tests;
+        const double half = 2.576 * sqrt(alpha * (1.0 - alpha) / ((double)run.tests / 3.0));
+        int within5 = 0, within10 = 0;
+        printf("  drift %.1f px/frame: frames to the first flag:", rates[r]);
+        for (int d = 0; d < DRIFT_TRACKS; ++d) {
+            printf(" %d", run.delay[d]);
+            within5 += run.delay[d] >= 1 && run.delay[d] <= 5;
+            within10 += run.delay[d] >= 1 && run.delay[d] <= 10;
+        }
+        printf(
+            "\n    flagged within 5 frames %d, within 10 frames %d of %d (%d evidence flags); "
+            "noise scale %.3f (true 0.25); clean alarm rate %.4f over %ld tests (alpha %.2f, "
+            "99%% interval +-%.4f)\n",
+            within5, within10, DRIFT_TRACKS, run.evidence_flags, run.noise_scale, rate, run.tests,
+            alpha, half);
+        assert_true(run.noise_scale > 0.2 && run.noise_scale < 0.4);
+        assert_true(run.tests > 4000);
+        assert_true(rate <= alpha + half);
+        if (rates[r] >= 1.0) assert_int_equal(within5, DRIFT_TRACKS);
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(pipeline_refuses_frames_before_calibration_and_out_of_order),
@@ -498,6 +622,7 @@ int main(void) {
         cmocka_unit_test(a_known_map_and_start_localize_from_the_first_frame),
         cmocka_unit_test(malformed_features_and_missing_frames_are_counted),
         cmocka_unit_test(a_fast_imu_still_starts_the_filter_at_rest),
+        cmocka_unit_test(parity_calibrates_its_pixel_noise_and_sees_a_drift),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

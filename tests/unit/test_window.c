@@ -241,6 +241,52 @@ static double h_null_violation(const sfd_window_t *w, const sfd_window_clone_t *
  * (sfd_window_start_at_rest from the mean IMU sample of that second), then the flight ramps up.
  * The errors are then those of the estimated start, in the frame the start defines (origin at
  * the start, yaw 0: the truth's own at tau = 0). */
+/* sfd_window_test_track over the last 3 frames, before each frame's update, of every point seen
+ * in all three (g_track_test = 1): the counts of its statistic. */
+static int g_track_test = 0;
+typedef struct {
+    long tests, alarms; /* clean tracks: tests and statistics above chi2(dof, 0.99) */
+    double sum_ratio;   /* sum of gamma / dof over them */
+    int jump_alarm[4];  /* the jumped track at jump_frame + 0..3: 1 flagged */
+} track_test_t;
+static track_test_t g_tt;
+static double g_hist_xn[NPTS][3][2]; /* the last three observations fed to the filter */
+static int g_hist_frame[NPTS][3];
+
+static void track_tests(const sfd_extrinsics_t *ext, int f, int64_t t0_us, int jump_track,
+                        int jump_frame) {
+    sfd_chi2_table_t chi2;
+    assert_status(sfd_chi2_table_init(&chi2, 0.01), SFD_OK);
+    for (int i = 0; i < NPTS; ++i) {
+        if (g_hist_frame[i][2] != f || g_hist_frame[i][1] != f - 1 || g_hist_frame[i][0] != f - 2) {
+            continue;
+        }
+        sfd_window_test_obs_t o;
+        memset(&o, 0, sizeof o);
+        o.frames = 3;
+        for (int k = 0; k < 3; ++k) {
+            o.utime[k] = t0_us + (int64_t)(f - 2 + k) * 50000;
+            o.xn[k][0] = g_hist_xn[i][k][0];
+            o.xn[k][1] = g_hist_xn[i][k][1];
+            o.cov_xn[k][0] = o.cov_xn[k][2] = kSigmaXn * kSigmaXn;
+        }
+        double gamma = 0.0;
+        int32_t dof = 0;
+        const sfd_status_t st = sfd_window_test_track(&g_w, ext, &o, &gamma, &dof);
+        if (st == SFD_ERR_STATE || st == SFD_ERR_NUMERIC) continue; /* too few clones; geometry */
+        assert_status(st, SFD_OK);
+        assert_int_equal(dof, 3); /* 2 L - 3, no depth prior */
+        if (i == jump_track) {
+            if (f >= jump_frame && f < jump_frame + 4)
+                g_tt.jump_alarm[f - jump_frame] = gamma > chi2.threshold[dof];
+            continue;
+        }
+        g_tt.tests++;
+        g_tt.alarms += gamma > chi2.threshold[dof];
+        g_tt.sum_ratio += gamma / dof;
+    }
+}
+
 static void run_flight_from(uint64_t seed, double seconds, int jac, int jump_track, int jump_frame,
                             int at_rest, run_result_t *out) {
     g_rest_s = at_rest ? 1.0 : 0.0;
@@ -343,7 +389,18 @@ static void run_flight_from(uint64_t seed, double seconds, int jac, int jump_tra
             obs[n].xn[0] = xn[0] + kSigmaXn * sfd_prng_gaussian(&rng);
             obs[n].xn[1] = xn[1] + kSigmaXn * sfd_prng_gaussian(&rng);
             obs[n].cov_xn[0] = obs[n].cov_xn[2] = kSigmaXn * kSigmaXn;
+            if (g_track_test) { /* history of what the filter was given */
+                for (int k = 0; k < 2; ++k) {
+                    g_hist_frame[i][k] = g_hist_frame[i][k + 1];
+                    memcpy(g_hist_xn[i][k], g_hist_xn[i][k + 1], sizeof g_hist_xn[i][k]);
+                }
+                g_hist_frame[i][2] = f;
+                memcpy(g_hist_xn[i][2], obs[n].xn, sizeof obs[n].xn);
+            }
             ++n;
+        }
+        if (g_track_test) {
+            track_tests(&ext, f, (int64_t)rest_samples * 5000, jump_track, jump_frame);
         }
         sfd_window_clone_t clones[SFD_MAX_WINDOW];
         int num_clones = 0;
@@ -565,6 +622,57 @@ static void a_jumped_track_is_gated_and_does_not_pull(void **state) {
     assert_true(jumped.pos_err_m < clean.pos_err_m + 0.02);
 }
 
+/* GIVEN the filter under way WHEN each point seen in the last three frames is tested with
+ * sfd_window_test_track (the parity test with the filter's translation and covariance) THEN its
+ * statistic is chi2(3): the alarm rate at alpha = 0.01 is inside the 99 % binomial interval
+ * (counted with a third of the tests as independent, since consecutive windows share two of
+ * their three frames), the mean of gamma / dof is 1 within 5 %; and a track that jumps by 20 px
+ * is flagged in the two windows that straddle the jump, not in the one after. */
+static void the_track_test_with_the_filters_covariance_is_calibrated(void **state) {
+    (void)state;
+    memset(&g_tt, 0, sizeof g_tt);
+    for (int i = 0; i < NPTS; ++i) {
+        for (int k = 0; k < 3; ++k) g_hist_frame[i][k] = -10;
+    }
+    /* a point seen at frames 118..121 jumps at 120 */
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 11);
+    scene(&rng);
+    sfd_extrinsics_t ext;
+    extrinsics(&ext);
+    int track = -1;
+    for (int i = 0; i < NPTS && track < 0; ++i) {
+        int seen = 1;
+        for (int f = 117; f <= 123; ++f) {
+            pose_t x;
+            double xn[2];
+            truth(f * IMU_PER_FRAME * kDt, &x);
+            seen = seen && observe(&x, &ext, g_pts[i], xn);
+        }
+        if (seen) track = i;
+    }
+    assert_true(track >= 0);
+    g_track_test = 1;
+    run_result_t r;
+    run_flight(11, 20.0, JAC_OBSERVABILITY, track, 120, &r);
+    g_track_test = 0;
+    const double alpha = 0.01, rate = (double)g_tt.alarms / (double)g_tt.tests;
+    const double n_eff = (double)g_tt.tests / 3.0;
+    const double half = 2.576 * sqrt(alpha * (1.0 - alpha) / n_eff);
+    const double mean_ratio = g_tt.sum_ratio / (double)g_tt.tests;
+    printf(
+        "  %ld tests of clean tracks: alarm rate %.4f (alpha %.2f, 99%% interval +-%.4f), "
+        "mean gamma/dof %.3f; jump at 120 flagged at 120..123: %d %d %d %d\n",
+        g_tt.tests, rate, alpha, half, mean_ratio, g_tt.jump_alarm[0], g_tt.jump_alarm[1],
+        g_tt.jump_alarm[2], g_tt.jump_alarm[3]);
+    assert_true(g_tt.tests > 8000);
+    assert_true(fabs(rate - alpha) <= half);
+    assert_true(fabs(mean_ratio - 1.0) < 0.05);
+    assert_int_equal(g_tt.jump_alarm[0], 1);
+    assert_int_equal(g_tt.jump_alarm[1], 1);
+    assert_int_equal(g_tt.jump_alarm[2], 0); /* all three frames after the jump: consistent */
+}
+
 static void flagged_tracks_are_dropped_and_capacities_hold(void **state) {
     (void)state;
     sfd_window_params_t prm;
@@ -625,6 +733,7 @@ int main(void) {
         cmocka_unit_test(pose_nees_with_ten_times_the_initial_uncertainty),
         cmocka_unit_test(unobservable_directions_stay_unobservable),
         cmocka_unit_test(a_jumped_track_is_gated_and_does_not_pull),
+        cmocka_unit_test(the_track_test_with_the_filters_covariance_is_calibrated),
         cmocka_unit_test(flagged_tracks_are_dropped_and_capacities_hold),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -45,6 +45,16 @@ typedef struct {
     double gyro_bias_rad_s[3]; /**< gyro bias subtracted before integration (rad/s) */
     int64_t max_imu_gap_us;    /**< largest IMU sample gap inside a frame interval (us), > 0 */
     uint64_t seed;             /**< PRNG seed of the RANSAC-type methods */
+    int pixel_noise_adapt;     /**< 1: the test with the filter's translation scales the pixel
+                                    noise variance by an online estimate (the median of each
+                                    frame's statistics, core/docs/parity_space.md "Pixel noise
+                                    scale"); 0: pixel_sigma_px as given */
+    int evidence_frames;       /**< with the filter's translation: a feature whose window passed
+                                    is tested again over its observations since its last alarm,
+                                    up to this many frames (a window-limited GLR over the track's
+                                    life, core/docs/parity_space.md "Evidence over a track's
+                                    life"); each test then at alpha / 2. 0 or <= window_frames:
+                                    off; at most SFD_MAX_WINDOW */
 } sfd_params_t;
 
 /** @brief Fills @p p with the defaults: method PARITY, 1 px, alpha 0.01, L = 3, n = 3, unknown

@@ -29,6 +29,7 @@
 #include "sfd_config.h"
 #include "sfd_params.h"
 #include "sfd_status.h"
+#include "sfd_window.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -135,7 +136,12 @@ enum {
     SFD_REASON_NUMERIC = 5,   /**< UNTESTED: noise covariance not positive definite */
     SFD_REASON_GROUP_FAILED = 6, /**< SPURIOUS: member of a failing group (paper's discard rule) */
     SFD_REASON_ISOLATED = 7,     /**< decided by isolation inside / re-test outside its group */
-    SFD_REASON_INCONCLUSIVE = 8  /**< SPURIOUS: group failed, isolation could not clear it */
+    SFD_REASON_INCONCLUSIVE = 8, /**< SPURIOUS: group failed, isolation could not clear it */
+    SFD_REASON_FEATURE_TEST = 9, /**< decided by the feature's own test with the translation
+                                      and Cov(z) from the window filter (every feature alone) */
+    SFD_REASON_EVIDENCE = 10     /**< SPURIOUS: its window passed, but the test over its
+                                      observations since its last alarm (up to evidence_frames
+                                      frames) failed: slow drift or a moving point */
 };
 
 /** Fault signature of a SPURIOUS feature (needs L >= 3 to tell them apart). */
@@ -147,6 +153,10 @@ enum { SFD_FAULT_NONE = 0, SFD_FAULT_JUMP = 1, SFD_FAULT_DRIFT = 2, SFD_FAULT_UN
 #define SFD_FLAG_WINDOW_FILLING 0x4u /**< fewer than L frames in the window: nothing tested */
 #define SFD_FLAG_BAD_FEATURES 0x8u   /**< some input features were rejected */
 #define SFD_FLAG_NO_REFERENCE 0x10u  /**< isolation had no consistent reference features */
+#define SFD_FLAG_TRANSLATION_UNKNOWN                                                           \
+    0x20u /**< translation_known is configured, but the window filter could not give the       \
+               window's poses (not started, a frame it did not clone): the unknown-translation \
+               group test of eqs. (29)-(33) judged this frame */
 
 /** One feature of an input frame. */
 typedef struct {
@@ -200,10 +210,12 @@ typedef struct {
     double uv_px[2];  /* raw pixels, for the spatial grouping */
     double depth_m;
     double depth_var_m2;
-    int16_t prev;  /* index of this track in the previous frame, -1 none */
-    int16_t run;   /* consecutive frames observed, this one included (saturating) */
-    int16_t valid; /* 1 usable, 0 rejected input */
-    int16_t pad_;
+    int16_t prev;    /* index of this track in the previous frame, -1 none */
+    int16_t run;     /* consecutive frames observed, this one included (saturating) */
+    int16_t valid;   /* 1 usable, 0 rejected input */
+    int16_t prior;   /* 1: depth_m, depth_var_m2 are the wire's prior; 0: the configured default */
+    int16_t segment; /* observations since the track's last alarm, this one included
+                        (saturating at SFD_MAX_WINDOW; the evidence test's window) */
 } sfd_parity_obs_t;
 
 typedef struct {
@@ -224,8 +236,13 @@ typedef struct {
     sfd_params_t params;
     sfd_camera_t camera;
     sfd_chi2_table_t chi2;
-    int32_t head;  /* ring index of the newest frame */
-    int32_t count; /* frames in the ring, <= L */
+    sfd_chi2_table_t chi2_median; /* medians of chi2(k): the pixel noise scale's reference */
+    sfd_chi2_table_t chi2_half;   /* at alpha / 2: the two tests of the evidence mode */
+    double noise_scale;           /* pixel noise variance factor (pixel_noise_adapt), 1 at init */
+    float stat_scratch[SFD_MAX_FEATURES]; /* one frame's statistics for the scale (no content
+                                             kept between frames) */
+    int32_t head;                         /* ring index of the newest frame */
+    int32_t count;                        /* frames in the ring, <= L */
     sfd_parity_frame_t frames[SFD_MAX_WINDOW];
     int16_t hash[2][SFD_PARITY_HASH_SLOTS]; /* track id -> index, for the newest two frames */
     int32_t hash_cur;
@@ -275,6 +292,26 @@ sfd_status_t sfd_parity_newest_xn(const sfd_parity_t *det, int64_t utime, int32_
  */
 sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
                                    const sfd_frame_motion_t *motion, sfd_verdict_t *out);
+
+/**
+ * @brief sfd_parity_push_frame() with the translation known from a running window filter
+ *        (Section III-A; core/docs/parity_space.md "Known translation from the window filter").
+ *
+ * When the parameters say translation_known and @p filter holds the window's frames (its newest
+ * L - 1 clones are the window's older frames and its current state is at this frame's time),
+ * every feature tracked through the L frames is tested alone with sfd_window_test_track(): the
+ * filter's poses and their covariance, the newest depth prior as a measurement, the threshold
+ * chi2(dof, 1 - alpha). Reason SFD_REASON_FEATURE_TEST; a feature that cannot be triangulated is
+ * UNTESTED (SFD_REASON_RANK). Otherwise (no filter, not started, a frame it did not clone, or
+ * translation_known = 0) this is sfd_parity_push_frame(), and with translation_known the verdict
+ * carries SFD_FLAG_TRANSLATION_UNKNOWN when the unknown-translation test judged the frame.
+ *
+ * @param filter may be NULL; @p ext the camera's pose in the IMU frame (required with a filter).
+ * @return as sfd_parity_push_frame().
+ */
+sfd_status_t sfd_parity_push_frame_filter(sfd_parity_t *det, const sfd_frame_t *frame,
+                                          const sfd_frame_motion_t *motion, sfd_window_t *filter,
+                                          const sfd_extrinsics_t *ext, sfd_verdict_t *out);
 
 #ifdef __cplusplus
 }

@@ -234,6 +234,36 @@ sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime, const sfd_window_o
  *  @return SFD_OK; SFD_ERR_STATE when not started; SFD_ERR_INVAL for null. */
 sfd_status_t sfd_window_to_ekf(sfd_window_t *w, sfd_ekf_t *ekf);
 
+/** One feature over the newest m frames, for sfd_window_test_track(). */
+typedef struct {
+    int32_t frames;                   /**< m, 2..SFD_MAX_WINDOW */
+    int64_t utime[SFD_MAX_WINDOW];    /**< frame times, oldest first (must match the filter's) */
+    double xn[SFD_MAX_WINDOW][2];     /**< normalized undistorted coordinates, oldest first */
+    double cov_xn[SFD_MAX_WINDOW][3]; /**< their covariance (xx, xy, yy), positive definite */
+    double depth_m;                   /**< depth prior of the NEWEST observation; <= 0: none */
+    double depth_var_m2;              /**< its variance (m^2), >= 0 */
+} sfd_window_test_obs_t;
+
+/**
+ * @brief The parity test of one feature with the translation known from the filter and Cov(z)
+ *        from its covariance (Tornqvist et al. 2008, Section III-A; core/docs/parity_space.md
+ *        "Known translation from the window filter"): the feature's point is triangulated over
+ *        the m frames (the newest m - 1 clones and the current, propagated IMU state, which is
+ *        the frame being judged), its stacked residual (2 rows per frame, plus the newest depth
+ *        prior when the parameters use depth priors) is projected onto the left null space of
+ *        the point's Jacobian, and gamma = r_o^T (H_o P H_o^T + R_o)^-1 r_o with the filter's
+ *        covariance P of the m poses is chi2(dof) for a static, correctly tracked feature. The
+ *        Jacobians are at the current estimates. Nothing of the filter changes (the pending
+ *        covariance propagation is applied, which is invisible; scratch_track is overwritten).
+ * @return SFD_OK with gamma, dof; SFD_ERR_INVAL for null, m out of range, non-finite or not
+ *         positive definite input; SFD_ERR_STATE when not started, fewer than m - 1 clones, or a
+ *         frame time that is not the filter's; SFD_ERR_NUMERIC when the point cannot be
+ *         triangulated (no parallax without a depth prior, behind a camera, out of
+ *         [min_depth_m, max_depth_m]) or the test's covariance is not positive definite.
+ */
+sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
+                                   const sfd_window_test_obs_t *obs, double *gamma, int32_t *dof);
+
 /** @brief Position variance (m^2, x y z) of the IMU state. SFD_ERR_STATE when not started. */
 sfd_status_t sfd_window_position_var(sfd_window_t *w, double var_m2[3]);
 
