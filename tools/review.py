@@ -25,6 +25,8 @@ base64 PNGs, with four sections:
   rejections  the node's input counters (SFD_TIMING rejected[], frames_in / refused /
               processed / untested; docs/rejections.md) over time and at the end.
 
+Every figure is drawn against the log's own event timestamps (seconds since its first event),
+which stay in order when a message's utime jumps (a restarted publisher, a time glitch).
 It prints the report's headline numbers (the same names as sfd-replay's --summary JSON) on
 stdout. Channel names are sfd's defaults (FEATURES, SFD_VERDICT, SFD_STATE, SFD_TIMING, TRUTH).
 The generated Python LCM types are found as `sfd` on PYTHONPATH, else in
