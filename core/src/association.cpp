@@ -92,6 +92,10 @@ double distance_px2(Score score, const sfd_ekf_camera_t &cam, const Model &model
     return du * du + dv * dv;
 }
 
+/// Fewest matches for OPRF's noise scale, and the median of chi2(1).
+constexpr int32_t kScaleMinMatches = 16;
+constexpr double kChi2Dof1Median = 0.454936423119572;
+
 /// Threshold of a match in px^2 and its normalizer (the sigma^2 of the statistic).
 struct Gate {
     double thr_px2;
@@ -100,8 +104,8 @@ struct Gate {
 
 Gate gate_of(Score score, const sfd_assoc_t &a, double sigma2, double noise_px2) {
     switch (score) {
-        case Score::kSampson:  // Sampson / sigma^2 ~ chi2(1) for a true match, exact pose
-            return Gate{a.chi2_1 * sigma2, sigma2};
+        case Score::kSampson:  // Sampson / (s sigma^2) ~ chi2(1) for a true match
+            return Gate{a.chi2_1 * a.sampson_scale * sigma2, a.sampson_scale * sigma2};
         case Score::kReproj:  // reprojection / (sigma^2 + landmark spread) ~ chi2(2)
             return Gate{a.chi2_2 * noise_px2, noise_px2};
         case Score::kTransfer:  // both pixels noisy: 2 sigma^2 per axis, plus allowed parallax
@@ -454,6 +458,7 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
         a.nx_prev_u[k] = a.nx_prev_v[k] = a.nx_curr_u[k] = a.nx_curr_v[k] = nan;
     }
     a.stage = SFD_STAGE_NONE;
+    a.sampson_scale = 1.0;
     a.score_kind = static_cast<int32_t>(Score::kSampson);
     a.selected = 1;
     if (nv == 0) {
@@ -549,13 +554,24 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
             sampson_stat_packed(&a, best_model.E, static_cast<float>(inv_fx * inv_fx),
                                 static_cast<float>(inv_fy * inv_fy),
                                 static_cast<float>(1.0 / sigma2), nv);
+            // Noise scale (core/docs/association.md "Noise scale"): the hypothesis' pose error
+            // and a pixel_sigma_px that is off both change every distance; the median over the
+            // matches, over the chi2(1) median 0.4549, measures it (robust while at most half
+            // are spurious); kept within [1/25, 25], 1 below 16 matches.
+            if (nv >= kScaleMinMatches) {
+                for (int32_t k = 0; k < nv; ++k) a.cur_stat[k] = a.packed_stat[k];
+                const double s = median_in_place(a.cur_stat, nv) / kChi2Dof1Median;
+                a.sampson_scale = (s < 0.04) ? 0.04 : ((s > 25.0) ? 25.0 : s);
+            }
+            const float inv_scale = static_cast<float>(1.0 / a.sampson_scale);
             const float chi2_1 = static_cast<float>(a.chi2_1);
             best_count = 0;
             for (int32_t k = 0; k < nv; ++k) {
                 const int32_t i = a.valid_idx[k];
-                a.best[i] = (a.packed_stat[k] <= chi2_1) ? 1U : 0U;
+                const float d = a.packed_stat[k] * inv_scale;
+                a.best[i] = (d <= chi2_1) ? 1U : 0U;
                 best_count += a.best[i];
-                a.best_stat[i] = a.packed_stat[k];
+                a.best_stat[i] = d;
             }
         }
         out->hypotheses_used = h;

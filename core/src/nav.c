@@ -431,6 +431,21 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
     return nav->num_matches;
 }
 
+/* Undistorted pixel of a world point seen from the camera (R_CtoW, p_C); 0 when it is not in
+ * front of the camera. */
+static int project_landmark(const sfd_ekf_camera_t *cam, const double R_CtoW[9],
+                            const double p_C[3], const double p_W[3], double uv[2]) {
+    double pc[3];
+    for (int r = 0; r < 3; ++r) {
+        pc[r] = 0.0;
+        for (int k = 0; k < 3; ++k) pc[r] += R_CtoW[3 * k + r] * (p_W[k] - p_C[k]);
+    }
+    if (!(pc[2] > 1e-6)) return 0;
+    uv[0] = cam->fx_px * pc[0] / pc[2] + cam->cx_px;
+    uv[1] = cam->fy_px * pc[1] / pc[2] + cam->cy_px;
+    return isfinite(uv[0]) && isfinite(uv[1]);
+}
+
 void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *status) {
     if (!nav->cfg.enabled || !nav->ready) {
         nav->have_prev = 0;
@@ -452,14 +467,15 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *stat
     for (int32_t i = 0; i < frame->num_features; ++i) {
         if (!nav->ok[i]) continue;
         const int64_t id = frame->features[i].track_id;
+        int32_t li = sfd_landmark_find(&nav->map, id);
         if (status[i] == SFD_VERDICT_SPURIOUS) {
-            /* The track no longer fits its landmark (a jump, a mover): drop the landmark, so the
-             * track is re-anchored from its next observation instead of failing for as long as
-             * the stale landmark lives. */
+            if (li >= 0 && nav->map.entries[li].fixed) continue; /* a known landmark stays */
+            /* The track no longer fits its landmark (a jump, a mover, a mismatch): the landmark
+             * is anchored again at this observation, so the track's next observation is tested
+             * against it (not left UNTESTED) and a stale landmark never pulls. */
             (void)sfd_landmark_remove(&nav->map, id);
-            continue;
+            li = -1;
         }
-        const int32_t li = sfd_landmark_find(&nav->map, id);
         if (li >= 0) {
             if (nav->map.entries[li].fixed) {
                 nav->map.entries[li].last_seen_utime = t; /* known: seen, never refined */
@@ -481,13 +497,25 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *stat
     }
     const int64_t max_age_us = (int64_t)(nav->cfg.landmark_max_age_s * 1e6);
     (void)sfd_landmark_evict_older_than(&nav->map, t - max_age_us);
-    /* the non-SPURIOUS observations become the next frame's previous ones */
+    /* this frame's observations (a flagged one of a known landmark: where it projects) become
+     * the next frame's previous ones */
     nav->prev_n = 0;
     for (int32_t i = 0; i < frame->num_features; ++i) {
-        if (!nav->ok[i] || status[i] == SFD_VERDICT_SPURIOUS) continue;
-        nav->prev_track[nav->prev_n] = frame->features[i].track_id;
-        nav->prev_uv[nav->prev_n][0] = nav->uv[i][0];
-        nav->prev_uv[nav->prev_n][1] = nav->uv[i][1];
+        if (!nav->ok[i]) continue;
+        const int64_t id = frame->features[i].track_id;
+        double *uv = nav->prev_uv[nav->prev_n];
+        uv[0] = nav->uv[i][0];
+        uv[1] = nav->uv[i][1];
+        if (status[i] == SFD_VERDICT_SPURIOUS) {
+            /* a flagged observation of a known landmark: the next frame's epipolar test starts
+             * from where the landmark projects now, not from the flagged pixel */
+            const int32_t li = sfd_landmark_find(&nav->map, id);
+            if (li >= 0 && nav->map.entries[li].fixed &&
+                !project_landmark(&nav->ekf_cam, R_CtoW, p_C, nav->map.entries[li].p_W_m, uv)) {
+                continue;
+            }
+        }
+        nav->prev_track[nav->prev_n] = id;
         nav->prev_n++;
     }
     prev_index_build(nav);

@@ -457,39 +457,6 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
     det->hash_cur = 1 - det->hash_cur;
 }
 
-// Median of v[0..n) (n >= 1), by a heap sort in place (no recursion, O(n log n)).
-double median_in_place(float *v, int n) {
-    for (int start = n / 2 - 1; start >= 0; --start) {
-        int root = start;
-        for (int guard = 0; guard < 32 && 2 * root + 1 < n; ++guard) {
-            int child = 2 * root + 1;
-            if (child + 1 < n && v[child] < v[child + 1]) ++child;
-            if (!(v[root] < v[child])) break;
-            const float t = v[root];
-            v[root] = v[child];
-            v[child] = t;
-            root = child;
-        }
-    }
-    for (int end = n - 1; end > 0; --end) {
-        const float t = v[0];
-        v[0] = v[end];
-        v[end] = t;
-        int root = 0;
-        for (int guard = 0; guard < 32 && 2 * root + 1 < end; ++guard) {
-            int child = 2 * root + 1;
-            if (child + 1 < end && v[child] < v[child + 1]) ++child;
-            if (!(v[root] < v[child])) break;
-            const float x = v[root];
-            v[root] = v[child];
-            v[child] = x;
-            root = child;
-        }
-    }
-    return (n % 2 == 1) ? static_cast<double>(v[n / 2])
-                        : 0.5 * (static_cast<double>(v[n / 2 - 1]) + static_cast<double>(v[n / 2]));
-}
-
 // Pixel noise scale (core/docs/parity_space.md "Pixel noise scale"): the frame's median of
 // gamma / median(chi2(dof)) is 1 when the pixel noise variance is right; the scale moves a fifth
 // of the way (in log) toward the value that makes it so, from frames with at least 16 tests, and

@@ -44,15 +44,18 @@ for m, j in summ.items():
           f"far {v['false_alarm_rate']:.4f} coverage {v['coverage']:.3f} rmse {v['rmse']:.3f} m")
 for m in ["oprf", "ransac1", "both"]:
     assert s[m]["rmse"] < s["none"]["rmse"], (m, s[m], s["none"])
-    # Strict recall counts the spurious observations the method left UNTESTED (OPRF and RANSAC1
-    # leave a flagged track's next observations untested: about half of them here); the tested
-    # ones are mostly found. Since sfd-sim's tracker fault model (apps/sim/SIMULATION.md: a third
-    # each of jumps 5-30 px, drifts 0.3-2 px/frame, one-frame mismatches 15-60 px) replaced the
-    # constant 12 px jumps, the slow drifts are rarely found by any method (tested recall ~0.15)
-    # and pull the overall recall down (oprf: tested 0.47, strict 0.32 at seed 5): the check is on
-    # the jumps, which play the old fault's part (tested recall ~0.93, strict ~0.48).
+    # Since sfd-sim's tracker fault model (apps/sim/SIMULATION.md: a third each of jumps 5-30 px,
+    # drifts 0.3-2 px/frame, one-frame mismatches 15-60 px) replaced the constant 12 px jumps, the
+    # slow drifts are rarely found (tested recall ~0.15 for the frame-to-frame methods) and pull
+    # the overall recall down: the check is on the jumps, which play the old fault's part. A jump
+    # labels two frames (the two 3-frame windows that straddle it). A frame-to-frame method
+    # (OPRF, RANSAC1) finds the first; a flagged track's landmark is then anchored again at the
+    # jumped observation, so the second is tested against the point the track now follows and is
+    # judged consistent (before, it was left UNTESTED): it finds about half of the tested jump
+    # labels. Parity's windows (in both) find both frames.
     j = s[m]["by_kind"]["jump"]
-    assert j["detected"] > 0.8 * (j["spurious"] - j["untested"]), (m, j)
+    share = 0.8 if m == "both" else 0.45
+    assert j["detected"] > share * (j["spurious"] - j["untested"]), (m, j)
     assert j["recall"] > 0.4 and s[m]["recall_tested"] > 0.4, (m, s[m])
 c = collections.Counter()
 for ev in lcm.EventLog(f"{d}/oprf.lcmlog", "r"):
