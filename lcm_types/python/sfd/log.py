@@ -58,12 +58,12 @@ def read_events(path):
             head = f.read(_HEADER.size)
             if not head:
                 return None
-            if len(head) < _HEADER.size:
-                return offset
-            sync, num, utime, chan_len, data_len = _HEADER.unpack(head)
-            if sync != _SYNC:
+            if len(head) >= 4 and struct.unpack(">I", head[:4])[0] != _SYNC:
                 raise LogError("%s: no LCM sync word at byte %d (not an LCM log, or corrupt)"
                                % (path, offset))
+            if len(head) < _HEADER.size:
+                return offset
+            _, num, utime, chan_len, data_len = _HEADER.unpack(head)
             body = f.read(chan_len + data_len)
             if len(body) < chan_len + data_len:
                 return offset
