@@ -4,8 +4,9 @@
 # and lcm-logplayer from Debian by absolute path, whatever is first on PATH (a PyPI `lcm` puts
 # its own there). Decoy lcm-gen / lcm-logger / lcm-logplayer that write a marker file and exit 1
 # go first on PATH; then
-#  - a fresh configure of the tree (apps and tests off) builds the LCM types (C, Python, and the
-#    Java jar when a JDK is present), and the generated C and Python equal the main build's;
+#  - a fresh configure of the tree (apps and tests off) builds the LCM types (C, C++, Python, and
+#    the Java jar when a JDK is present), and the generated C, C++ and Python equal the main
+#    build's;
 #  - integration.node_logplayer's script (Debian's lcm-logplayer into sfd-node, lcm-logger
 #    recording) passes;
 #  - no decoy ran (no marker);
@@ -39,18 +40,18 @@ cmake -S "$src" -B "$scratch" -G Ninja -DCMAKE_BUILD_TYPE=Release -DSFD_BUILD_TE
   cat "$tmp/configure.txt"; fail "configure with decoys on PATH failed"; }
 grep -q '^SFD_LCM_GEN:FILEPATH=/usr/bin/lcm-gen$' "$scratch/CMakeCache.txt" ||
   fail "SFD_LCM_GEN is not /usr/bin/lcm-gen: $(grep SFD_LCM_GEN "$scratch/CMakeCache.txt")"
-targets=(sfd_lcm_types sfd_lcm_types_python)
+targets=(sfd_lcm_types sfd_lcmtypes sfd_lcm_types_cpp sfd_lcm_types_python)
 if grep -q '^build sfd_lcmtypes_java:' "$scratch/build.ninja"; then
   targets+=(sfd_lcmtypes_java)
 fi
 cmake --build "$scratch" --target "${targets[@]}" > "$tmp/build.txt" 2>&1 || {
   cat "$tmp/build.txt"; fail "building ${targets[*]} with decoys on PATH failed"; }
-# Same generator, same code: the generated C and Python equal the main build's.
-for d in c python/sfd; do
-  diff -r "$build/lcm_types/$d" "$scratch/lcm_types/$d" > "$tmp/diff.txt" || {
+# Same generator, same code: the generated C, C++ and Python equal the main build's.
+for d in c cpp python/sfd; do
+  diff -r -x __pycache__ "$build/lcm_types/$d" "$scratch/lcm_types/$d" > "$tmp/diff.txt" || {
     cat "$tmp/diff.txt"; fail "lcm_types/$d generated in the scratch build differs from $build's"; }
 done
-echo "lcm_tools_decoy: built ${targets[*]} with decoys first on PATH; generated C and Python equal"
+echo "lcm_tools_decoy: built ${targets[*]} with decoys first on PATH; generated C, C++ and Python equal"
 
 # The logplayer/logger test, decoys still first on PATH and no tool path given.
 env -u SFD_LCM_LOGGER -u SFD_LCM_LOGPLAYER \
