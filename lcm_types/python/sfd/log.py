@@ -26,24 +26,23 @@ generated types use only the standard struct module. Only numpy is required.
 """
 import collections
 import csv
+import importlib
 import os
 import re
 import struct
 
 import numpy as np
 
-from . import (camera_info_t, feature_frame_t, feature_verdict_t, imu_t, nav_state_t, timing_t,
-               truth_t, truth_v1_t)
-
-TYPES = (imu_t, camera_info_t, feature_frame_t, feature_verdict_t, nav_state_t, timing_t, truth_t,
-         truth_v1_t)
+# Every generated type of the package (the classes lcm-gen wrote, imported by __init__.py).
+TYPES = tuple(t for _, t in sorted(vars(importlib.import_module(__package__)).items())
+              if isinstance(t, type) and hasattr(t, "_get_packed_fingerprint"))
 _BY_FINGERPRINT = {t._get_packed_fingerprint(): t for t in TYPES}
 _SYNC = 0xEDA1DA01
 _HEADER = struct.Struct(">IqqII")  # sync, event number, timestamp (us), channel len, data len
 
 
 class LogError(ValueError):
-    """The file is not an LCM log (bad sync word or impossible lengths)."""
+    """The file is not an LCM log (no sync word where an event starts)."""
 
 
 def read_events(path):
