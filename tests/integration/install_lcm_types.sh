@@ -145,6 +145,9 @@ else
   javac -d "$tmp/jc" -cp "$jar:/usr/share/java/lcm.jar" "$src/examples/lcm_consumer/VerdictRead.java"
   java -cp "$tmp/jc:$jar:/usr/share/java/lcm.jar" VerdictRead "$tmp/verdict.bin"
   [ "$("$P/bin/sfd-spy" --version)" = "sfd-spy $version" ] || fail "sfd-spy --version"
+  # --help loads lcm.spy.Spy itself from that class path (headless: it prints lcm-spy's usage)
+  "$P/bin/sfd-spy" --help > "$tmp/spy_help.txt" 2>&1 || { cat "$tmp/spy_help.txt"; fail "sfd-spy --help"; }
+  grep -q "^usage: lcm-spy" "$tmp/spy_help.txt" || { cat "$tmp/spy_help.txt"; fail "sfd-spy --help: no lcm-spy usage"; }
   # the tree moved: sfd-spy still finds its jar (relative to itself) and lcm-spy's type
   # discovery sees every sfd type
   mv "$P" "$tmp/moved"
