@@ -12,10 +12,13 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 # Debian packages (SPEC "Dependencies") plus the analysis tools CI runs (clang-14 with its
 # sanitizer and libFuzzer runtimes, libclang-rt-14-dev, for the `fuzz` preset).
+# liblcm-java, libjchart2d-java and a JDK: the Java types jar and sfd-spy (lcm-spy needs jchart2d,
+# which Debian's liblcm-java does not pull in).
 APT_PKGS=(
   build-essential cmake ninja-build pkg-config ccache
   libeigen3-dev
   liblcm-dev liblcm-bin libglib2.0-dev
+  liblcm-java libjchart2d-java default-jdk-headless
   libopencv-dev
   libcmocka-dev
   nlohmann-json3-dev

@@ -3,7 +3,10 @@
 # integration.install_consumer: `cmake --install` of the build into a scratch prefix (core
 # package, node, configuration, systemd unit), then
 # examples/consumer is configured and built against the installed tree twice, through
-# find_package(sfd) (CMake package, sfd::core) and through pkg-config (sfd.pc), and both run.
+# find_package(sfd) (CMake package, sfd::core) and through pkg-config (sfd.pc), and both run
+# the parity detector on the scene they build: the one feature whose track jumps is SPURIOUS,
+# the 19 others CONSISTENT, in both tested frames. A consumer compiled with other capacities
+# than the installed library's does not compile.
 # usage: install_consumer.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 build="$1"; src="$2"
@@ -30,7 +33,10 @@ test -f "$tmp/prefix/share/sfd/hil.md"
   --config "$tmp/prefix/etc/sfd/sfd.yaml" >/dev/null
 cmake -S "$src/examples/consumer" -B "$tmp/b" -DCMAKE_PREFIX_PATH="$tmp/prefix" >/dev/null
 cmake --build "$tmp/b" >/dev/null
-"$tmp/b/sfd_consumer"
+"$tmp/b/sfd_consumer" > "$tmp/consumer.txt" || { cat "$tmp/consumer.txt"; exit 1; }
+grep -q "2 tested frames: jumped track 107 SPURIOUS (statistic [0-9.]*), 0 wrong verdicts: ok$" \
+  "$tmp/consumer.txt" || { cat "$tmp/consumer.txt"; echo "install_consumer: detector verdicts"; exit 1; }
+tail -1 "$tmp/consumer.txt"
 # sfd.pc is relocatable (prefix=${pcfiledir}/...): the tree moved elsewhere still resolves,
 # without pkg-config's --define-prefix
 mv "$tmp/prefix" "$tmp/moved"
@@ -43,7 +49,9 @@ case "$flags" in
 esac
 # shellcheck disable=SC2086
 cc -o "$tmp/consumer_pc" "$src/examples/consumer/main.c" $flags
-"$tmp/consumer_pc"
+"$tmp/consumer_pc" > "$tmp/consumer_pc.txt" || { cat "$tmp/consumer_pc.txt"; exit 1; }
+cmp "$tmp/consumer.txt" "$tmp/consumer_pc.txt" || {
+  echo "install_consumer: the pkg-config build's verdicts differ from the CMake build's"; exit 1; }
 # a consumer compiled with other capacities than the installed library's is a compile error
 # naming the capacity (it used to build, then crash in sfd_parity_init)
 for def in SFD_MAX_FEATURES=512 SFD_MAX_WINDOW=4 SFD_IMU_RING_CAPACITY=1024; do
@@ -58,4 +66,4 @@ done
 # shellcheck disable=SC2086
 cc -DSFD_MAX_FEATURES=256 -DSFD_MAX_LANDMARKS=512 -o "$tmp/consumer_same" \
   "$src/examples/consumer/main.c" $flags
-echo "install_consumer: find_package(sfd) and a relocated pkg-config (sfd.pc) consumer built and ran"
+echo "install_consumer: find_package(sfd) and a relocated pkg-config (sfd.pc) consumer built and ran the detector"

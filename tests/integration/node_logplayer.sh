@@ -19,10 +19,14 @@ if ! unshare -n true 2>/dev/null; then
   echo "node_logplayer: 'unshare -n' is not permitted here (needs root or user namespaces)" >&2
   exit 1
 fi
-command -v lcm-logplayer >/dev/null && command -v lcm-logger >/dev/null || {
-  echo "node_logplayer: lcm-logplayer/lcm-logger missing (tools/setup.sh installs liblcm-bin)" >&2
-  exit 1
-}
+# Debian's tools by absolute path (CMake checks they are liblcm-bin 1.3.x and passes them), never
+# whichever lcm-logger is first on PATH
+export SFD_LCM_LOGGER="${SFD_LCM_LOGGER:-/usr/bin/lcm-logger}"
+export SFD_LCM_LOGPLAYER="${SFD_LCM_LOGPLAYER:-/usr/bin/lcm-logplayer}"
+for tool in "$SFD_LCM_LOGGER" "$SFD_LCM_LOGPLAYER"; do
+  [ -x "$tool" ] || {
+    echo "node_logplayer: $tool: not an executable (tools/setup.sh installs liblcm-bin)" >&2; exit 1; }
+done
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 "$build/apps/sfd-sim" mistracking -o "$tmp/in.lcmlog" --frames 60 --seed 3 >/dev/null
@@ -34,7 +38,7 @@ ip link set lo up
 ip link set lo multicast on
 ip route add 224.0.0.0/4 dev lo
 url="udpm://239.255.76.67:7667?ttl=0"
-lcm-logger -q -f --lcm-url="$url" "$SFD_TMP/recorded.lcmlog" &
+"$SFD_LCM_LOGGER" -q -f --lcm-url="$url" "$SFD_TMP/recorded.lcmlog" &
 logger=$!
 if [ -n "$SFD_PRELOAD" ]; then
   LD_PRELOAD="$SFD_PRELOAD" "$SFD_BUILD/apps/sfd-node" --lcm-url "$url" > "$SFD_TMP/node.txt" 2>&1 &
@@ -43,7 +47,7 @@ else
 fi
 node=$!
 sleep 1
-lcm-logplayer --lcm-url="$url" -s 2.0 "$SFD_TMP/in.lcmlog" >/dev/null
+"$SFD_LCM_LOGPLAYER" --lcm-url="$url" -s 2.0 "$SFD_TMP/in.lcmlog" >/dev/null
 sleep 1
 kill -INT "$node"
 rc=0; wait "$node" || rc=$?

@@ -11,7 +11,7 @@
 #include <stdint.h>
 
 #define SFD_VERSION_MAJOR 0
-#define SFD_VERSION_MINOR 1
+#define SFD_VERSION_MINOR 2
 #define SFD_VERSION ((SFD_VERSION_MAJOR << 16) | SFD_VERSION_MINOR)
 
 #ifdef __cplusplus
