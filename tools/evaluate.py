@@ -46,9 +46,11 @@ SCENARIOS = {
 }
 FLIGHTS = {"paper-uav", "mistracking", "moving-object", "worst-case"}  # take --frames
 # Grid key -> (sfd-replay flag, apps/config/sfd.yaml key giving its reference value).
-GRID = {"alpha": ("--alpha", "false_alarm_rate"), "window": ("--window", "window_frames"),
-        "group": ("--group", "group_size"), "pixel-sigma": ("--pixel-sigma", "pixel_sigma_px"),
-        "depth-default": ("--depth-default", "default_depth_m")}
+GRID = {"alpha": ("--false-alarm-rate", "false_alarm_rate"),
+        "window": ("--window-frames", "window_frames"),
+        "group": ("--group-size", "group_size"),
+        "pixel-sigma": ("--pixel-sigma-px", "pixel_sigma_px"),
+        "depth-default": ("--default-depth-m", "default_depth_m")}
 PRESETS = {
     "quick": dict(scenarios=["mistracking", "moving-object"], seeds="1,2",
                   methods=",".join(METHODS), grid=["alpha=0.01,0.1"], frames=200),

@@ -293,7 +293,7 @@ void Progress::update(long long done, double fraction) {
 }
 
 void Progress::finish(long long done) {
-    if (enabled_ && printed_) print(done, 1.0, true);
+    if (enabled_) print(done, 1.0, true);  // the totals, once, on a terminal
 }
 
 void Progress::print(long long done, double fraction, bool last) {

@@ -97,7 +97,7 @@ class Progress {
     /// `done` items so far; `fraction` of the whole work done, in [0, 1] (< 0: unknown, no
     /// percentage or time left).
     void update(long long done, double fraction);
-    /// The last line, ended with a newline (when any line was printed).
+    /// The last line (totals and time taken), ended with a newline; on a terminal only.
     void finish(long long done);
     bool enabled() const { return enabled_; }
 
