@@ -153,7 +153,8 @@ int bench_assoc(int argc, char **argv) {
     std::string only;       // keep the methods whose name contains this
     // argv[0] is "assoc" (the subcommand): its own options and help.
     sfdcli::Parser cli(
-        "sfd-bench", "sfd-bench assoc", "[--trials T] [--seed S] [--csv FILE] [--quick | --worst-case]\n"
+        "sfd-bench", "sfd-bench assoc",
+        "[--trials T] [--seed S] [--csv FILE] [--quick | --worst-case]\n"
         "                       [--sfd-only] [--only STR]",
         "  sfd's association methods against OpenCV's findFundamentalMat / findEssentialMat.\n"
         "  Same correspondences for every method; N in {50,100,200,500}, outlier ratio\n"

@@ -116,7 +116,8 @@ int run_parity(int argc, char **argv) {
                   return true;
               });
     cli.section("One configuration (for callgrind: tools/bench_parity_callgrind.sh)");
-    cli.flag("single", "run one configuration instead of the grid", [&is_single] { is_single = true; });
+    cli.flag("single", "run one configuration instead of the grid",
+             [&is_single] { is_single = true; });
     cli.value("features", "N", "features, 1..SFD_MAX_FEATURES (200)",
               int_opt(&single[0], 1, SFD_MAX_FEATURES));
     cli.value("window-frames", "L", "window, 2..SFD_MAX_WINDOW (3)",

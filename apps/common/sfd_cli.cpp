@@ -35,7 +35,8 @@ void Parser::add(Option option) {
     entries_.push_back(Entry{std::move(option), section_});
 }
 
-void Parser::flag(const std::string &name, const std::string &help, std::function<void()> on) {
+void Parser::flag(const std::string &name, const std::string &help,
+                  const std::function<void()> &on) {
     Option o;
     o.name = name;
     o.help = help;
@@ -103,7 +104,8 @@ void Parser::print_help(std::FILE *f) const {
         bool first = true;
         do {
             const size_t nl = o.help.find('\n', start);
-            const std::string line = o.help.substr(start, nl == std::string::npos ? nl : nl - start);
+            const std::string line =
+                o.help.substr(start, nl == std::string::npos ? nl : nl - start);
             if (first && left.size() + 1 < kColumn) {
                 std::fprintf(f, "%-*s%s\n", static_cast<int>(kColumn), left.c_str(), line.c_str());
             } else {
@@ -131,8 +133,9 @@ int Parser::parse(int argc, char **argv, std::vector<std::string> *positional) {
     std::string shortopts = "+:h";  // '+': stop at the first non-option (handled below)
     for (size_t k = 0; k < entries_.size(); ++k) {
         const Option &o = entries_[k].option;
-        longopts.push_back(option{o.name.c_str(), o.metavar.empty() ? no_argument : required_argument,
-                                  nullptr, kLongBase + static_cast<int>(k)});
+        longopts.push_back(option{o.name.c_str(),
+                                  o.metavar.empty() ? no_argument : required_argument, nullptr,
+                                  kLongBase + static_cast<int>(k)});
         if (o.short_name != 0) {
             shortopts += o.short_name;
             if (!o.metavar.empty()) shortopts += ':';
@@ -175,7 +178,7 @@ int Parser::parse(int argc, char **argv, std::vector<std::string> *positional) {
         }
         if (c == ':') return fail((name.empty() ? word : "--" + name) + " needs a value");
         if (!name.empty() && index >= 0 && name != longopts[static_cast<size_t>(index)].name) {
-            return fail("unknown option --" + name + hint);  // an abbreviation
+            return fail(std::string("unknown option --").append(name).append(hint));  // abbreviated
         }
         if (c == 'h' || c == kHelp) {
             print_help(stdout);
@@ -193,9 +196,11 @@ int Parser::parse(int argc, char **argv, std::vector<std::string> *positional) {
                 if (entries_[j].option.short_name == c) k = j;
             }
         }
-        if (k >= entries_.size()) return fail("unknown option " + word + hint);
+        if (k >= entries_.size())
+            return fail(std::string("unknown option ").append(word).append(hint));
         const Option &o = entries_[k].option;
-        const std::string shown = o.short_name == c ? std::string("-") + o.short_name : "--" + o.name;
+        const std::string shown =
+            o.short_name == c ? std::string("-") + o.short_name : "--" + o.name;
         if (!o.alias_of.empty()) {
             std::fprintf(stderr, "%s: %s is deprecated: use --%s\n", prog_.c_str(), shown.c_str(),
                          o.alias_of.c_str());
@@ -203,8 +208,9 @@ int Parser::parse(int argc, char **argv, std::vector<std::string> *positional) {
         const std::string value = o.metavar.empty() || optarg == nullptr ? "" : optarg;
         std::string why;
         if (!o.set(value, &why)) {
-            return fail(shown + ": " + (o.metavar.empty() ? "" : (value.empty() ? "\"\"" : value) + " ") +
-                        why);
+            std::string message = shown + ": ";
+            if (!o.metavar.empty()) message.append(value.empty() ? "\"\"" : value).append(" ");
+            return fail(message.append(why));
         }
     }
     return -1;
@@ -300,15 +306,15 @@ void Progress::print(long long done, double fraction, bool last) {
     const double elapsed_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     char line[200];
-    int n = std::snprintf(line, sizeof line, "%s: %lld %s, %.0f %s/s", prog_.c_str(), done,
-                          unit_.c_str(), elapsed_s > 0 ? double(done) / elapsed_s : 0.0,
-                          unit_.c_str());
+    int n =
+        std::snprintf(line, sizeof line, "%s: %lld %s, %.0f %s/s", prog_.c_str(), done,
+                      unit_.c_str(), elapsed_s > 0 ? double(done) / elapsed_s : 0.0, unit_.c_str());
     if (last) {
-        n += std::snprintf(line + n, sizeof line - size_t(n), ", done in %.1f s", elapsed_s);
+        std::snprintf(line + n, sizeof line - size_t(n), ", done in %.1f s", elapsed_s);
     } else if (fraction > 0.0 && fraction <= 1.0) {
         const double left_s = elapsed_s * (1.0 - fraction) / fraction;
-        n += std::snprintf(line + n, sizeof line - size_t(n), ", %.0f%%, %.0f s left",
-                           100.0 * fraction, left_s);
+        std::snprintf(line + n, sizeof line - size_t(n), ", %.0f%%, %.0f s left", 100.0 * fraction,
+                      left_s);
     }
     // "\r" rewrites the line; "\033[K" clears what a longer line left behind.
     std::fprintf(stderr, "\r%s\033[K%s", line, last ? "\n" : "");

@@ -44,7 +44,7 @@ class Parser {
     void section(const std::string &title);
     void add(Option option);
     /// A switch (no value).
-    void flag(const std::string &name, const std::string &help, std::function<void()> on);
+    void flag(const std::string &name, const std::string &help, const std::function<void()> &on);
     /// An option with a value.
     void value(const std::string &name, const std::string &metavar, const std::string &help,
                Setter set);

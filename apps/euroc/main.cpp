@@ -301,7 +301,8 @@ int main(int argc, char **argv) {
         if (gt_csv.empty() && file_exists(gt)) gt_csv = gt;
     }
     if (images.empty() || imu_csv.empty() || calib_yaml.empty() || out_path.empty()) {
-        return cli.fail("need --euroc DIR or --images, --imu and --calib; and -o (sfd-euroc --help)");
+        return cli.fail(
+            "need --euroc DIR or --images, --imu and --calib; and -o (sfd-euroc --help)");
     }
     // No output may be an input (docs/deploy.md, "Reading logs and writing outputs"): not one of
     // the files read, and not inside the image folder.

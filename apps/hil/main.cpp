@@ -488,9 +488,7 @@ int run_plot(const std::string &csv, const std::string &png) {
     return 0;
 }
 
-}  // namespace
-
-int main(int argc, char **argv) {
+int run(int argc, char **argv) {
     Options opt;
     sfdapp::AppConfig cfg;
     std::string err, config_path, lcm_url;
@@ -533,10 +531,10 @@ int main(int argc, char **argv) {
               "moving-object, worst-case (sfd-sim --help)",
               text_opt(&opt.sim));
     cli.value("frames", "N", "--sim: camera frames at 20 Hz (400)", long_opt(&frames, 1, 1000000));
-    cli.value("features", "N",
-              "--sim: features per frame (200; worst-case " + std::to_string(SFD_MAX_FEATURES) +
-                  ")",
-              long_opt(&features, 1, SFD_MAX_FEATURES));
+    cli.value(
+        "features", "N",
+        "--sim: features per frame (200; worst-case " + std::to_string(SFD_MAX_FEATURES) + ")",
+        long_opt(&features, 1, SFD_MAX_FEATURES));
     cli.value("seed", "N", "--sim: seed (1)", long_opt(&seed, 0, 2147483647LL));
     cli.value("random-fraction", "F", "--sim worst-case: features replaced by random pixels (1.0)",
               real_opt(&opt.random_fraction, 0.0, 1.0));
@@ -565,7 +563,8 @@ int main(int argc, char **argv) {
                                                 : Options::kProcessing;
                   return true;
               });
-    cli.value("timeout-ms", "N", "a frame without verdict this long after its publish is lost (1000)",
+    cli.value("timeout-ms", "N",
+              "a frame without verdict this long after its publish is lost (1000)",
               long_opt(&opt.timeout_ms, 1, 600000));
     cli.value("warmup", "N", "first N frames left out of the latency figures (10)",
               long_opt(&opt.warmup, 0, 10000000));
@@ -682,7 +681,7 @@ int main(int argc, char **argv) {
         std::fprintf(stderr, "sfd-hil: --png needs --csv (the plot reads the CSV)\n");
         return 2;
     }
-    long log_events = 0;  // the log's events (progress: fraction published)
+    long log_events = 0;          // the log's events (progress: fraction published)
     if (!opt.log_path.empty()) {  // the whole log is checked before anything is published
         if (play_log(opt.log_path, nullptr, &log_events, &err) != 0) {
             std::fprintf(stderr, "sfd-hil: --log: %s\n", err.c_str());
@@ -975,15 +974,14 @@ int main(int argc, char **argv) {
         using json = nlohmann::ordered_json;
         const auto stats_json = [](const Stats &st) {
             if (st.n == 0) return json(nullptr);
-            return json{{"n", st.n},       {"min", st.min},   {"median", st.median},
-                        {"p99", st.p99},   {"p999", st.p999}, {"max", st.max},
-                        {"mean", st.mean}, {"std", st.sd}};
+            return json{{"n", st.n},       {"min", st.min}, {"median", st.median}, {"p99", st.p99},
+                        {"p999", st.p999}, {"max", st.max}, {"mean", st.mean},     {"std", st.sd}};
         };
         json rejected = json::object();
         for (int k = 0; k < SFD_TIMING_T_NUM_REASONS; ++k) {
-            rejected[sfd_reject_reason_str(k)] =
-                json{{"during_run", static_cast<long long>(g.last_rejected[k] - g.first_rejected[k])},
-                     {"since_node_start", static_cast<long long>(g.last_rejected[k])}};
+            rejected[sfd_reject_reason_str(k)] = json{
+                {"during_run", static_cast<long long>(g.last_rejected[k] - g.first_rejected[k])},
+                {"since_node_start", static_cast<long long>(g.last_rejected[k])}};
         }
         json j;
         j["source"] = source;
@@ -1120,4 +1118,17 @@ int main(int argc, char **argv) {
     (void)events;
     (void)fst;
     return rc;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    try {
+        return run(argc, argv);
+    } catch (const std::exception &e) {  // std::bad_alloc, a JSON encoding failure
+        std::fprintf(stderr, "sfd-hil: %s\n", e.what());
+    } catch (...) {
+        std::fprintf(stderr, "sfd-hil: unexpected failure\n");
+    }
+    return 1;
 }

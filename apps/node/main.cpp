@@ -167,7 +167,8 @@ int main(int argc, char **argv) {
     // config files first, then the flags over them, then one validation of the result
     // (sfdapp::validate): any bad key is exit 2 before LCM starts.
     sfdcli::Parser cli(
-        "sfd-node", "sfd-node", "[--config F] [--lcm-url URL] [--KEY VALUE ...] [real-time options]",
+        "sfd-node", "sfd-node",
+        "[--config F] [--lcm-url URL] [--KEY VALUE ...] [real-time options]",
         "  The onboard process: subscribes IMU, CAMERA_INFO, FEATURES (and TRUTH with\n"
         "  filter.init_from_truth: 1, evaluation only); publishes SFD_VERDICT, SFD_STATE,\n"
         "  SFD_TIMING. Stops on SIGINT/SIGTERM.");
@@ -235,8 +236,9 @@ int main(int argc, char **argv) {
     std::signal(SIGTERM, on_signal);
     const double *b = cfg.node.params.gyro_bias_rad_s;
     std::printf("sfd-node %s: method %s, alpha %g, L %d, n %d, lcm %s\n",
-                sfdcli::version_string().c_str(), cfg.method.c_str(), cfg.node.params.false_alarm_rate,
-                cfg.node.params.window_frames, cfg.node.params.group_size, cfg.lcm_url.c_str());
+                sfdcli::version_string().c_str(), cfg.method.c_str(),
+                cfg.node.params.false_alarm_rate, cfg.node.params.window_frames,
+                cfg.node.params.group_size, cfg.lcm_url.c_str());
     if (rt.fifo_priority > 0 || rt.cpu >= 0 || rt.lock_memory) {
         std::printf("sfd-node: real-time: scheduler %s, CPU %s, memory %s\n",
                     rt.fifo_priority > 0

@@ -251,8 +251,9 @@ int run(int argc, char **argv) {
     out.name = "output";
     out.short_name = 'o';
     out.metavar = "OUT.lcmlog";
-    out.help = "write the input events and the published SFD_VERDICT,\n"
-               "SFD_STATE and SFD_TIMING";
+    out.help =
+        "write the input events and the published SFD_VERDICT,\n"
+        "SFD_STATE and SFD_TIMING";
     out.set = [&out_arg, &out_path](const std::string &v, std::string *) {
         out_arg = v;
         out_path = out_arg.c_str();

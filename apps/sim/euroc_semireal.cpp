@@ -143,8 +143,7 @@ void semireal_help(FILE *out) {
         "  (no images): the real imu0 samples and the ground-truth motion over their overlap,\n"
         "  landmarks on the walls/floor/ceiling of a room around the flight projected through\n"
         "  cam0 (T_BS, intrinsics, distortion of mav0/cam0/sensor.yaml), spurious features\n"
-        "  (moving group, mistracks, mismatches) labelled in TRUTH. See apps/sim/SEMIREAL.md.\n"
-);
+        "  (moving group, mistracks, mismatches) labelled in TRUTH. See apps/sim/SEMIREAL.md.\n");
 }
 
 int write_semireal_log(const SemirealOptions &opt) {

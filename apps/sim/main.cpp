@@ -316,8 +316,7 @@ bool applies(const char *scope, const std::string &scenario) {
     const std::string sc = std::string(" ") + scope + " ";
     const bool log = sfdsim::is_flight_scenario(scenario);
     return sc.find(" " + scenario + " ") != std::string::npos ||
-           (log && sc.find(" log ") != std::string::npos) ||
-           sc.find(" all ") != std::string::npos;
+           (log && sc.find(" log ") != std::string::npos) || sc.find(" all ") != std::string::npos;
 }
 
 }  // namespace
@@ -433,11 +432,12 @@ int main(int argc, char **argv) {
         "target fraction of spurious observations (0.1); paper-uav log: a\n"
         "fraction R / (W - 1) of the tracks get the fault each frame",
         real_opt(&opt.outlier_ratio, 0.0, 1.0));
-    add("jump-px", "P", "isolation euroc-semireal", "mistrack jump (8 px; flight logs draw 5-30 px)",
-        real_opt(&opt.jump_px, 0.0, 1000.0));
+    add("jump-px", "P", "isolation euroc-semireal",
+        "mistrack jump (8 px; flight logs draw 5-30 px)", real_opt(&opt.jump_px, 0.0, 1000.0));
     add("csv-dir", "DIR", "paper-uav isolation thesis-loop",
         "write the scenario's CSV files into DIR (created if missing)", text_opt(&opt.csv_dir));
-    add("fault-magnitude", "K", "paper-uav", "paper-uav log: k of k(-1,1) in normalized units (0.02)",
+    add("fault-magnitude", "K", "paper-uav",
+        "paper-uav log: k of k(-1,1) in normalized units (0.02)",
         real_opt(&opt.fault_magnitude, 0.0, 1e4));
     add("depth-var-m2", "V", "log euroc-semireal",
         "depth prior variance written with the features (m^2; flight\nlogs 0, euroc-semireal 0.01)",
@@ -536,10 +536,9 @@ int main(int argc, char **argv) {
     } else if (scenario != nullptr && !std::strcmp(scenario->name, "euroc-semireal")) {
         cli.extra_help(sfdsim::semireal_help);
     }
-    cli.epilog(scenario == nullptr
-                   ? "sfd-sim SCENARIO --help lists the options of SCENARIO.\n"
-                     "Exit: 0 ok, 2 bad usage, 1 internal failure."
-                   : "Exit: 0 ok, 2 bad usage, 1 internal failure.");
+    cli.epilog(scenario == nullptr ? "sfd-sim SCENARIO --help lists the options of SCENARIO.\n"
+                                     "Exit: 0 ok, 2 bad usage, 1 internal failure."
+                                   : "Exit: 0 ok, 2 bad usage, 1 internal failure.");
     std::vector<std::string> positional;
     if (const int rc = cli.parse(argc, argv, &positional); rc >= 0) return rc;
     if (positional.empty()) return cli.fail("missing SCENARIO (sfd-sim --help)");

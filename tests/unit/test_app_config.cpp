@@ -518,7 +518,8 @@ void overrides_are_validated_after_the_file(void **) {
     // --window-frames 9 (sfd_app_cli.hpp: the flag of a key sets it, the range is validate()'s)
     assert_true(sfdapp::set_key("window_frames", "9", "--window-frames", &cfg, &err));
     assert_false(sfdapp::validate(cfg, &err));
-    expect_equal(err, "--window-frames: window_frames: 9 is not in 2..5", "an override out of range");
+    expect_equal(err, "--window-frames: window_frames: 9 is not in 2..5",
+                 "an override out of range");
 }
 
 // GIVEN a key's flag value THEN it is read whole by the file's type rules: 2.5 is not an
@@ -545,7 +546,8 @@ void command_line_values_follow_the_file_rules(void **) {
     assert_false(sfdapp::set_key("false_alarm_rate", "0.05x", "--false-alarm-rate", &cfg, &why));
     expect_equal(why, "is not a number", "junk after a number");
     assert_false(sfdapp::set_key("max_imu_gap_us", "2.5", "--max-imu-gap-us", &cfg, &why));
-    assert_true(sfdapp::set_key("gyro_bias_rad_s", "0.1,-0.2,3e-3", "--gyro-bias-rad-s", &cfg, &why));
+    assert_true(
+        sfdapp::set_key("gyro_bias_rad_s", "0.1,-0.2,3e-3", "--gyro-bias-rad-s", &cfg, &why));
     assert_true(cfg.node.params.gyro_bias_rad_s[1] == -0.2);
     assert_false(sfdapp::set_key("gyro_bias_rad_s", "1,2", "--gyro-bias-rad-s", &cfg, &why));
     assert_false(sfdapp::set_key("method", "ransac", "--method", &cfg, &why));
