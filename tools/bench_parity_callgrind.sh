@@ -19,7 +19,7 @@ for N in 50 100 200 500; do
       for known in 0 1; do
         out="$tmp/cg.$N.$L.$n.$known"
         valgrind --tool=callgrind --callgrind-out-file="$out" --toggle-collect=sfd_parity_push_frame \
-          "$bench" parity --single "$N" "$L" "$n" "$known" --frames "$frames" >/dev/null 2>&1
+          "$bench" parity --single --features "$N" --window-frames "$L" --group-size "$n" --translation-known "$known" --frames "$frames" >/dev/null 2>&1
         total="$(grep -E '^summary:' "$out" | awk '{print $2}')"
         calls=$((frames + L))
         tr=$([ "$known" = 1 ] && echo known || echo unknown)

@@ -30,7 +30,7 @@ printf '%%YAML:1.0\n---\ngyro_bias_rad_s: %s\nfilter:\n   init_from_truth: 1\n' 
 runs=()
 for run in fb nofb fb-d3; do
   log="${run%-d3}"; extra=()
-  [ "$run" = fb-d3 ] && extra=(--depth-default 3)
+  [ "$run" = fb-d3 ] && extra=(--default-depth-m 3)
   for m in parity oprf ransac1 ransacf both; do
     "$build/apps/sfd-replay" "$out/$log.lcmlog" --config "$out/cfg.yaml" --method "$m" \
       "${extra[@]}" -o "$out/${run}_$m.out.lcmlog" --summary "$out/${run}_$m.json" | head -2

@@ -46,9 +46,11 @@ SCENARIOS = {
 }
 FLIGHTS = {"paper-uav", "mistracking", "moving-object", "worst-case"}  # take --frames
 # Grid key -> (sfd-replay flag, apps/config/sfd.yaml key giving its reference value).
-GRID = {"alpha": ("--alpha", "false_alarm_rate"), "window": ("--window", "window_frames"),
-        "group": ("--group", "group_size"), "pixel-sigma": ("--pixel-sigma", "pixel_sigma_px"),
-        "depth-default": ("--depth-default", "default_depth_m")}
+GRID = {"alpha": ("--false-alarm-rate", "false_alarm_rate"),
+        "window": ("--window-frames", "window_frames"),
+        "group": ("--group-size", "group_size"),
+        "pixel-sigma": ("--pixel-sigma-px", "pixel_sigma_px"),
+        "depth-default": ("--default-depth-m", "default_depth_m")}
 PRESETS = {
     "quick": dict(scenarios=["mistracking", "moving-object"], seeds="1,2",
                   methods=",".join(METHODS), grid=["alpha=0.01,0.1"], frames=200),
@@ -175,11 +177,24 @@ def plan(a, grid, config):
 def execute(a, gens, reps):
     """Run every job; (gen results by name, replay results in plan order)."""
     done, n = [0], len(reps)
+    # A progress line on a terminal only (stderr a tty, CI unset or empty), rewritten at most
+    # twice a second, as the sfd tools do (docs/deploy.md, "Command line"); quiet otherwise.
+    tty = sys.stderr.isatty() and not os.environ.get("CI")
+    t0, last = time.monotonic(), [0.0]
 
     def progress():
         done[0] += 1
-        if done[0] == n or done[0] % max(1, n // 10) == 0:
-            print("evaluate.py: %d/%d runs" % (done[0], n), file=sys.stderr, flush=True)
+        if not tty:
+            return
+        now = time.monotonic()
+        if done[0] < n and now - last[0] < 0.5:
+            return
+        last[0] = now
+        rate = done[0] / max(now - t0, 1e-9)
+        left = (n - done[0]) / rate if rate > 0 else 0.0
+        print("\revaluate.py: %d/%d runs, %.1f runs/s, %.0f%%, %.0f s left\033[K"
+              % (done[0], n, rate, 100.0 * done[0] / n, left), end="\n" if done[0] == n else "",
+              file=sys.stderr, flush=True)
 
     if a.serial:
         g = {k: gen_task(j) for k, j in gens.items()}

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "sfd/sfd.h"
+#include "sfd_cli.hpp"
 #include "sfd_eval.hpp"
 #include "sfd_pair_sim.h"
 
@@ -140,21 +141,6 @@ bool run_method(const Method &m, const sim_pair_t &pr, uint64_t seed, Stats *st)
     return true;
 }
 
-void usage_assoc(FILE *f) {
-    std::fprintf(
-        f,
-        "usage: sfd-bench assoc [--trials T] [--seed S] [--csv FILE] [--quick | --worst-case]\n"
-        "                       [--sfd-only] [--only STR]\n"
-        "  Same correspondences for every method; N in {50,100,200,500}, outlier ratio\n"
-        "  {0,0.1,0.3,0.5}, pixel noise {0.5,1} px, random and structured outliers.\n"
-        "  --quick: only N=200, 30%% outliers, 1 px (the SPEC's headline case).\n"
-        "  --worst-case: N=SFD_MAX_FEATURES, 100%% random outliers, 1 px: the hypothesis\n"
-        "  budget is spent every frame (column 'hypotheses': median / max per frame).\n"
-        "  --sfd-only: sfd's methods only; --only STR: methods whose name contains STR\n"
-        "  (for profiling, e.g. valgrind --tool=callgrind ... --only OPRF).\n"
-        "  Prints a markdown table; --csv writes every row.\n");
-}
-
 }  // namespace
 
 int bench_assoc(int argc, char **argv) {
@@ -165,37 +151,53 @@ int bench_assoc(int argc, char **argv) {
     bool worst = false;     // SFD_MAX_FEATURES matches, all outliers
     bool sfd_only = false;  // skip OpenCV (profiling sfd under callgrind)
     std::string only;       // keep the methods whose name contains this
-    for (int i = 2; i < argc; ++i) {
-        const char *a = argv[i];
-        if (!std::strcmp(a, "--trials") && i + 1 < argc) {
-            char *end = nullptr;
-            const long v = std::strtol(argv[++i], &end, 10);
-            if (*end != '\0' || v < 1 || v > 100000) {
-                std::fprintf(stderr, "sfd-bench: --trials: expected 1..100000\n");
-                return 2;
-            }
-            trials = int(v);
-        } else if (!std::strcmp(a, "--seed") && i + 1 < argc) {
-            seed = std::strtoull(argv[++i], nullptr, 10);
-        } else if (!std::strcmp(a, "--csv") && i + 1 < argc) {
-            csv = argv[++i];
-        } else if (!std::strcmp(a, "--quick")) {
-            quick = true;
-        } else if (!std::strcmp(a, "--worst-case")) {
-            worst = true;
-        } else if (!std::strcmp(a, "--sfd-only")) {
-            sfd_only = true;
-        } else if (!std::strcmp(a, "--only") && i + 1 < argc) {
-            only = argv[++i];
-        } else if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
-            usage_assoc(stdout);
-            return 0;
-        } else {
-            std::fprintf(stderr, "sfd-bench: unknown or incomplete option: %s\n", a);
-            usage_assoc(stderr);
-            return 2;
-        }
-    }
+    // argv[0] is "assoc" (the subcommand): its own options and help.
+    sfdcli::Parser cli(
+        "sfd-bench", "sfd-bench assoc",
+        "[--trials T] [--seed S] [--csv FILE] [--quick | --worst-case]\n"
+        "                       [--sfd-only] [--only STR]",
+        "  sfd's association methods against OpenCV's findFundamentalMat / findEssentialMat.\n"
+        "  Same correspondences for every method; N in {50,100,200,500}, outlier ratio\n"
+        "  {0,0.1,0.3,0.5}, pixel noise {0.5,1} px, random and structured outliers. Prints a\n"
+        "  markdown table; --csv writes every row.");
+    cli.value("trials", "T", "trials per configuration, 1..100000 (50)",
+              [&trials](const std::string &v, std::string *why) {
+                  long long x = 0;
+                  if (!sfdcli::parse_int(v, 1, 100000, &x, why)) return false;
+                  trials = static_cast<int>(x);
+                  return true;
+              });
+    cli.value("seed", "S", "seed (1)", [&seed](const std::string &v, std::string *why) {
+        long long x = 0;
+        if (!sfdcli::parse_int(v, 0, 9007199254740992LL, &x, why)) return false;
+        seed = static_cast<uint64_t>(x);
+        return true;
+    });
+    std::string csv_path;
+    cli.value("csv", "FILE", "also write every row as CSV",
+              [&csv_path, &csv](const std::string &v, std::string *) {
+                  csv_path = v;
+                  csv = csv_path.c_str();
+                  return true;
+              });
+    cli.flag("quick", "only N=200, 30% outliers, 1 px (the SPEC's headline case)",
+             [&quick] { quick = true; });
+    cli.flag("worst-case",
+             "N=SFD_MAX_FEATURES, 100% random outliers, 1 px: the hypothesis\n"
+             "budget is spent every frame (column 'hypotheses': median / max)",
+             [&worst] { worst = true; });
+    cli.flag("sfd-only", "sfd's methods only", [&sfd_only] { sfd_only = true; });
+    cli.value("only", "STR",
+              "methods whose name contains STR (for profiling, e.g.\n"
+              "valgrind --tool=callgrind ... --only OPRF)",
+              [&only](const std::string &v, std::string *) {
+                  only = v;
+                  return true;
+              });
+    cli.epilog("Exit: 0 ok, 2 bad usage, 1 internal failure.");
+    std::vector<std::string> positional;
+    if (const int rc = cli.parse(argc, argv, &positional); rc >= 0) return rc;
+    if (!positional.empty()) return cli.fail("unexpected argument " + positional[0]);
     std::vector<Method> methods = {
         {"sfd OPRF", SFD_METHOD_OPRF, 0, 0, 0},
         {"sfd RANSAC1", SFD_METHOD_RANSAC1, 0, 0, 0},

@@ -19,6 +19,8 @@
 #include <vector>
 
 #include "sfd/sfd.h"
+#include "sfd_cli.hpp"
+#include "sfd_opencv_quiet.hpp"
 #include "sfd_eval.hpp"
 #include "sfd_scene_sim.h"
 
@@ -76,71 +78,58 @@ bool run(int N, int L, int n, int known, int frames, uint64_t seed, Result *res)
     return true;
 }
 
-void usage(FILE *out) {
-    std::fprintf(out,
-                 "usage: sfd-bench parity [--frames N] [--seed S] [--csv FILE]\n"
-                 "       sfd-bench parity --single N L n known [--frames F]\n"
-                 "       sfd-bench assoc [--trials T] [--seed S] [--csv FILE] [--quick]\n"
-                 "  assoc     sfd association methods against OpenCV (sfd-bench assoc --help)\n"
-                 "  parity    per-frame time of the parity detector over the grid\n"
-                 "            N {50,100,200,500} x L {2,3,5} x n {3,4} x {known, unknown}\n"
-                 "  --single  one configuration (for callgrind: tools/bench_parity_callgrind.sh)\n"
-                 "  --frames  measured frames per configuration (default 2000)\n"
-                 "  --csv     also write the table as CSV\n"
-                 "Exit: 0 ok, 2 bad usage, 1 internal failure.\n");
-}
-
-}  // namespace
-
-int main(int argc, char **argv) {
-    if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
-        usage(argc < 2 ? stderr : stdout);
-        return argc < 2 ? 2 : 0;
-    }
-    if (std::strcmp(argv[1], "assoc") == 0) return bench_assoc(argc, argv);
-    if (std::strcmp(argv[1], "parity") != 0) {
-        std::fprintf(stderr, "sfd-bench: unknown mode: %s (available: parity, assoc)\n", argv[1]);
-        return 2;
-    }
+int run_parity(int argc, char **argv) {
     int frames = 2000;
     uint64_t seed = 1;
+    std::string csv_path;
     const char *csv = nullptr;
-    int single[4] = {0, 0, 0, 0};
+    int single[4] = {200, 3, 3, 0};  // --features, --window-frames, --group-size, known
     bool is_single = false;
-    for (int i = 2; i < argc; ++i) {
-        const char *a = argv[i];
-        if (!std::strcmp(a, "--frames") && i + 1 < argc) {
-            char *end = nullptr;
-            const long v = std::strtol(argv[++i], &end, 10);
-            frames = (*end == '\0' && v >= 1 && v <= 10000000) ? int(v) : -1;
-            if (frames < 1) {
-                std::fprintf(stderr, "sfd-bench: --frames: expected 1..10000000\n");
-                return 2;
-            }
-        } else if (!std::strcmp(a, "--seed") && i + 1 < argc) {
-            seed = std::strtoull(argv[++i], nullptr, 10);
-        } else if (!std::strcmp(a, "--csv") && i + 1 < argc) {
-            csv = argv[++i];
-        } else if (!std::strcmp(a, "--single") && i + 4 < argc) {
-            for (int k = 0; k < 4; ++k) {
-                char *end = nullptr;
-                const long v = std::strtol(argv[++i], &end, 10);
-                single[k] = (*end == '\0' && v >= 0 && v <= 100000) ? int(v) : -1;
-            }
-            is_single = true;
-        } else {
-            std::fprintf(stderr, "sfd-bench: unknown or incomplete option: %s\n", a);
-            usage(stderr);
-            return 2;
-        }
-    }
+    // argv[0] is "parity" (the subcommand): its own options and help.
+    sfdcli::Parser cli(
+        "sfd-bench", "sfd-bench parity",
+        "[--frames N] [--seed S] [--csv FILE]\n"
+        "       sfd-bench parity --single [--features N] [--window-frames L] [--group-size n]\n"
+        "                        [--translation-known 0|1] [--frames F]",
+        "  Per-frame time of the parity detector over the grid N {50,100,200,500} x\n"
+        "  L {2,3,5} x n {3,4} x {known, unknown translation}; a markdown table.");
+    const auto int_opt = [](int *dst, long long lo, long long hi) -> sfdcli::Setter {
+        return [dst, lo, hi](const std::string &v, std::string *why) {
+            long long x = 0;
+            if (!sfdcli::parse_int(v, lo, hi, &x, why)) return false;
+            *dst = static_cast<int>(x);
+            return true;
+        };
+    };
+    cli.value("frames", "N", "measured frames per configuration, 1..10000000 (2000)",
+              int_opt(&frames, 1, 10000000));
+    cli.value("seed", "S", "seed (1)", [&seed](const std::string &v, std::string *why) {
+        long long x = 0;
+        if (!sfdcli::parse_int(v, 0, 9007199254740992LL, &x, why)) return false;
+        seed = static_cast<uint64_t>(x);
+        return true;
+    });
+    cli.value("csv", "FILE", "also write the table as CSV",
+              [&csv_path, &csv](const std::string &v, std::string *) {
+                  csv_path = v;
+                  csv = csv_path.c_str();
+                  return true;
+              });
+    cli.section("One configuration (for callgrind: tools/bench_parity_callgrind.sh)");
+    cli.flag("single", "run one configuration instead of the grid",
+             [&is_single] { is_single = true; });
+    cli.value("features", "N", "features, 1..SFD_MAX_FEATURES (200)",
+              int_opt(&single[0], 1, SFD_MAX_FEATURES));
+    cli.value("window-frames", "L", "window, 2..SFD_MAX_WINDOW (3)",
+              int_opt(&single[1], 2, SFD_MAX_WINDOW));
+    cli.value("group-size", "n", "group size, 1..SFD_MAX_GROUP (3)",
+              int_opt(&single[2], 1, SFD_MAX_GROUP));
+    cli.value("translation-known", "0|1", "1: known translation (0)", int_opt(&single[3], 0, 1));
+    cli.epilog("Exit: 0 ok, 2 bad usage, 1 internal failure.");
+    std::vector<std::string> positional;
+    if (const int rc = cli.parse(argc, argv, &positional); rc >= 0) return rc;
+    if (!positional.empty()) return cli.fail("unexpected argument " + positional[0]);
     if (is_single) {
-        if (single[3] < 0 || single[0] < 1 || single[0] > SFD_MAX_FEATURES || single[1] < 2 ||
-            single[1] > SFD_MAX_WINDOW || single[2] < 1 || single[2] > SFD_MAX_GROUP) {
-            std::fprintf(stderr, "sfd-bench: --single: N 1..%d, L 2..%d, n 1..%d\n",
-                         SFD_MAX_FEATURES, SFD_MAX_WINDOW, SFD_MAX_GROUP);
-            return 2;
-        }
         Result r;
         if (!run(single[0], single[1], single[2], single[3] != 0, frames, seed, &r)) return 1;
         std::printf("N=%d L=%d n=%d known=%d frames=%d median_us=%.2f p99_us=%.2f max_us=%.2f\n",
@@ -185,4 +174,24 @@ int main(int argc, char **argv) {
     }
     if (fc != nullptr) std::fclose(fc);
     return 0;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    sfdapp::quiet_opencv();
+    // Subcommands parity and assoc, each with its own options and --help.
+    sfdcli::Parser cli("sfd-bench", "sfd-bench", "SUBCOMMAND [options]",
+                       "  Side-by-side benchmarks. Subcommands (sfd-bench SUBCOMMAND --help):\n"
+                       "  parity    per-frame time of the parity detector over a grid\n"
+                       "  assoc     sfd association methods against OpenCV");
+    cli.epilog("Exit: 0 ok, 2 bad usage, 1 internal failure.");
+    if (argc < 2 || argv[1][0] == '-') {
+        std::vector<std::string> positional;
+        if (const int rc = cli.parse(argc, argv, &positional); rc >= 0) return rc;
+        return cli.fail("missing SUBCOMMAND (parity or assoc; sfd-bench --help)");
+    }
+    if (std::strcmp(argv[1], "assoc") == 0) return bench_assoc(argc - 1, argv + 1);
+    if (std::strcmp(argv[1], "parity") == 0) return run_parity(argc - 1, argv + 1);
+    return cli.fail(std::string("unknown subcommand ") + argv[1] + " (parity or assoc)");
 }

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "sfd_app_config.hpp"
+#include "sfd_opencv_quiet.hpp"
 
 #include <opencv2/core.hpp>
 #include <sys/stat.h>
@@ -381,6 +382,7 @@ static std::string one_line(std::string m) {
 // cv::FileStorage throws more than cv::Exception on some malformed files (std::length_error,
 // found by fuzz.config): any exception is a refused file, never a crash.
 bool read_config(const std::string &path, AppConfig *cfg, std::string *error) {
+    quiet_opencv();  // the reason goes into *error, once
     try {
         return read_config_impl(path, cfg, error);
     } catch (const cv::Exception &e) {
@@ -834,51 +836,6 @@ bool validate(const AppConfig &cfg, std::string *error) {
 
 bool load_config(const std::string &path, AppConfig *cfg, std::string *error) {
     return read_config(path, cfg, error) && validate(*cfg, error);
-}
-
-bool parse_int_option(const char *option, const char *text, int *out, std::string *error) {
-    char *end = nullptr;
-    errno = 0;
-    const long long v = std::strtoll(text, &end, 10);
-    if (end == text || *end != '\0') {
-        *error = std::string(option) + " " + text + ": not an integer";
-        return false;
-    }
-    if (errno == ERANGE || v < std::numeric_limits<int>::min() ||
-        v > std::numeric_limits<int>::max()) {
-        *error = std::string(option) + " " + text + ": out of the integer range";
-        return false;
-    }
-    *out = static_cast<int>(v);
-    return true;
-}
-
-bool parse_double_option(const char *option, const char *text, double *out, std::string *error) {
-    char *end = nullptr;
-    const double v = std::strtod(text, &end);
-    if (end == text || *end != '\0') {
-        *error = std::string(option) + " " + text + ": not a number";
-        return false;
-    }
-    *out = v;
-    return true;
-}
-
-std::vector<std::string> split_options(int argc, char **argv,
-                                       const std::set<std::string> &value_options) {
-    std::vector<std::string> words;
-    for (int i = 0; i < argc; ++i) {
-        const std::string a = argv[i];
-        const size_t eq = a.find('=');
-        if (i > 0 && a.rfind("--", 0) == 0 && eq != std::string::npos &&
-            value_options.count(a.substr(0, eq)) != 0) {
-            words.push_back(a.substr(0, eq));
-            words.push_back(a.substr(eq + 1));
-        } else {
-            words.push_back(a);
-        }
-    }
-    return words;
 }
 
 bool parse_long(const char *s, long lo, long hi, long *out) {

@@ -6,9 +6,7 @@
 #define SFD_APP_CONFIG_HPP
 
 #include <map>
-#include <set>
 #include <string>
-#include <vector>
 
 #include "sfd_node_core.h"
 
@@ -57,20 +55,6 @@ bool set_method(const std::string &name, AppConfig *cfg, std::string *error);
 /// On the first bad one returns false with "ORIGIN: KEY: VALUE is not ..." (ORIGIN: the file or
 /// the option that set it). A configuration it accepts is accepted by sfd_node_init().
 bool validate(const AppConfig &cfg, std::string *error);
-
-/// A command-line integer for `option`: the whole of `text` in base 10, within the range of int
-/// (the range proper is validate()'s). False with "OPTION TEXT: not an integer" (or "out of the
-/// integer range").
-bool parse_int_option(const char *option, const char *text, int *out, std::string *error);
-
-/// A command-line number for `option`: the whole of `text` (strtod). False with "OPTION TEXT: not
-/// a number".
-bool parse_double_option(const char *option, const char *text, double *out, std::string *error);
-
-/// The command line (argv[0] included) with every "--opt=value" whose "--opt" is one of
-/// `value_options` split into "--opt" "value" (SPEC "Commands": `--opt value` or `--opt=value`).
-std::vector<std::string> split_options(int argc, char **argv,
-                                       const std::set<std::string> &value_options);
 
 /// A command-line integer: the whole of s in base 10, within [lo, hi]; false otherwise.
 bool parse_long(const char *s, long lo, long hi, long *out);

@@ -26,6 +26,7 @@
 #include <cstring>
 #include <dirent.h>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <sys/stat.h>
 #include <vector>
@@ -39,50 +40,12 @@
 #include "euroc_io.hpp"
 #include "lcm_log.hpp"
 #include "sfd_output.h"
+#include "sfd_cli.hpp"
+#include "sfd_opencv_quiet.hpp"
 
 namespace {
 
 const char *kProg = "sfd-euroc";
-
-void usage(FILE *f) {
-    std::fprintf(
-        f,
-        "usage: sfd-euroc (--euroc DIR | --images DIR --imu CSV --calib YAML) -o OUT.lcmlog\n"
-        "                 [--frames CSV] [--gt CSV] [--cam camN] [--max-frames N]\n"
-        "                 [--imu-before-s S] [--camera-id ID]\n"
-        "                 [--max-features N] [--min-distance-px PX] [--no-fb-check]\n"
-        "                 [--fb-threshold-px PX] [--quality-level Q] [--lk-window-px W]\n"
-        "                 [--lk-levels L] [--border-px PX]\n"
-        "  Converts an EuRoC/ASL recording into an sfd log (IMU, CAMERA_INFO, FEATURES from\n"
-        "  the OpenCV tracker, TRUTH at the frame times when ground truth is given).\n"
-        "  --euroc DIR      standard layout: DIR/mav0 (or DIR = mav0) with imu0/data.csv,\n"
-        "                   camN/data.csv, camN/data/<ns>.png, camN/sensor.yaml and, if present,\n"
-        "                   state_groundtruth_estimate0/data.csv; explicit flags override\n"
-        "  --cam camN       camera folder for --euroc (default cam0)\n"
-        "  --images DIR     image folder (8-bit grayscale PNG/JPEG, read as grayscale)\n"
-        "  --frames CSV     EuRoC camera data.csv (timestamp [ns], file name); default: every\n"
-        "                   <ns>.png/.jpg in --images, by time\n"
-        "  --imu CSV        EuRoC imu0/data.csv (t [ns], gyro xyz [rad/s], accel xyz [m/s^2])\n"
-        "  --calib YAML     EuRoC camera sensor.yaml (T_BS, resolution, intrinsics, distortion)\n"
-        "  --gt CSV         EuRoC ground truth (t [ns], p xyz [m], q w x y z, ...): TRUTH poses\n"
-        "                   interpolated at the frame times (no spurious labels)\n"
-        "  --max-frames N   convert the first N frames only (default: all)\n"
-        "  --imu-before-s S IMU kept from S seconds before the first frame (default 1.0) to\n"
-        "                   the last frame; the count of samples left out is printed\n"
-        "  --camera-id ID   camera_id of CAMERA_INFO and FEATURES (default 0)\n"
-        "  tracker (drivers/opencv/sfd_feature_tracker.hpp):\n"
-        "  --max-features N      tracks per frame, 1..%d (default 150)\n"
-        "  --min-distance-px PX  spacing between tracks (default 20)\n"
-        "  --no-fb-check         plain pyramidal LK, no forward-backward check\n"
-        "  --fb-threshold-px PX  forward-backward round-trip limit (default 1.0)\n"
-        "  --quality-level Q     Shi-Tomasi quality level (default 0.01)\n"
-        "  --lk-window-px W      LK window side, odd (default 21)\n"
-        "  --lk-levels L         LK pyramid levels (default 3)\n"
-        "  --border-px PX        image border without features (default 8)\n"
-        "Exit: 0 ok, 2 bad usage or bad/missing input (the message names file and line),\n"
-        "1 write failure.\n",
-        sfd::kTrackerMaxFeatures);
-}
 
 bool file_exists(const std::string &p) {
     struct stat st;
@@ -208,28 +171,13 @@ struct LogEvent {
     std::vector<uint8_t> data;
 };
 
-bool parse_int(const char *flag, const char *s, long lo, long hi, long *out) {
-    char *end = nullptr;
-    errno = 0;
-    const long v = std::strtol(s, &end, 10);
-    if (*s == '\0' || *end != '\0' || errno != 0 || v < lo || v > hi) {
-        std::fprintf(stderr, "%s: %s: expected an integer %ld..%ld, got '%s'\n", kProg, flag, lo,
-                     hi, s);
-        return false;
+// OpenCV's exception text on one line (it holds line breaks).
+std::string one_line(std::string m) {
+    for (char &c : m) {
+        if (c == '\n' || c == '\r') c = ' ';
     }
-    *out = v;
-    return true;
-}
-bool parse_real(const char *flag, const char *s, double lo, double hi, double *out) {
-    char *end = nullptr;
-    const double v = std::strtod(s, &end);
-    if (*s == '\0' || *end != '\0' || !(v >= lo && v <= hi)) {
-        std::fprintf(stderr, "%s: %s: expected a number in [%g, %g], got '%s'\n", kProg, flag, lo,
-                     hi, s);
-        return false;
-    }
-    *out = v;
-    return true;
+    while (!m.empty() && m.back() == ' ') m.pop_back();
+    return m;
 }
 
 }  // namespace
@@ -239,61 +187,98 @@ int main(int argc, char **argv) {
     long max_frames = 0, camera_id = 0;
     double imu_before_s = 1.0;
     sfd::TrackerConfig tc;
-    for (int i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        const bool has = i + 1 < argc;
-        long iv = 0;
-        if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
-            usage(stdout);
-            return 0;
-        } else if (!std::strcmp(a, "--euroc") && has) {
-            euroc = argv[++i];
-        } else if (!std::strcmp(a, "--cam") && has) {
-            cam = argv[++i];
-        } else if (!std::strcmp(a, "--images") && has) {
-            images = argv[++i];
-        } else if (!std::strcmp(a, "--frames") && has) {
-            frames_csv = argv[++i];
-        } else if (!std::strcmp(a, "--imu") && has) {
-            imu_csv = argv[++i];
-        } else if (!std::strcmp(a, "--calib") && has) {
-            calib_yaml = argv[++i];
-        } else if (!std::strcmp(a, "--gt") && has) {
-            gt_csv = argv[++i];
-        } else if (!std::strcmp(a, "-o") && has) {
-            out_path = argv[++i];
-        } else if (!std::strcmp(a, "--max-frames") && has) {
-            if (!parse_int(a, argv[++i], 1, 100000000, &max_frames)) return 2;
-        } else if (!std::strcmp(a, "--camera-id") && has) {
-            if (!parse_int(a, argv[++i], 0, 2147483647, &camera_id)) return 2;
-        } else if (!std::strcmp(a, "--imu-before-s") && has) {
-            if (!parse_real(a, argv[++i], 0.0, 1e6, &imu_before_s)) return 2;
-        } else if (!std::strcmp(a, "--max-features") && has) {
-            if (!parse_int(a, argv[++i], 1, sfd::kTrackerMaxFeatures, &iv)) return 2;
-            tc.max_features = int(iv);
-        } else if (!std::strcmp(a, "--min-distance-px") && has) {
-            if (!parse_real(a, argv[++i], 0.0, 1000.0, &tc.min_distance_px)) return 2;
-        } else if (!std::strcmp(a, "--no-fb-check")) {
-            tc.fb_check = false;
-        } else if (!std::strcmp(a, "--fb-threshold-px") && has) {
-            if (!parse_real(a, argv[++i], 1e-6, 1000.0, &tc.fb_threshold_px)) return 2;
-        } else if (!std::strcmp(a, "--quality-level") && has) {
-            if (!parse_real(a, argv[++i], 1e-9, 0.999999, &tc.quality_level)) return 2;
-        } else if (!std::strcmp(a, "--lk-window-px") && has) {
-            if (!parse_int(a, argv[++i], 5, 101, &iv)) return 2;
-            tc.lk_window_px = int(iv);
-        } else if (!std::strcmp(a, "--lk-levels") && has) {
-            if (!parse_int(a, argv[++i], 0, 8, &iv)) return 2;
-            tc.lk_pyramid_levels = int(iv);
-        } else if (!std::strcmp(a, "--border-px") && has) {
-            if (!parse_int(a, argv[++i], 0, 1000, &iv)) return 2;
-            tc.border_px = int(iv);
-        } else {
-            std::fprintf(stderr, "%s: unknown or incomplete option: %s\n", kProg, a);
-            usage(stderr);
-            return 2;
-        }
-    }
+    // OpenCV's own log lines (imread, cv::FileStorage) are silenced: sfd says what failed in
+    // one line naming the file.
+    sfdapp::quiet_opencv();
+    sfdcli::Parser cli(
+        kProg, kProg,
+        "(--euroc DIR | --images DIR --imu CSV --calib YAML) -o OUT.lcmlog\n"
+        "                 [--frames CSV] [--gt CSV] [--cam camN] [--max-frames N]\n"
+        "                 [--imu-before-s S] [--camera-id ID] [tracker options]",
+        "  Converts an EuRoC/ASL recording into an sfd log (IMU, CAMERA_INFO, FEATURES from\n"
+        "  the OpenCV tracker, TRUTH at the frame times when ground truth is given). On a\n"
+        "  terminal (and CI unset), a progress line on stderr.");
+    const auto text_opt = [](std::string *dst) -> sfdcli::Setter {
+        return [dst](const std::string &v, std::string *) {
+            *dst = v;
+            return true;
+        };
+    };
+    const auto int_opt = [](auto *dst, long long lo, long long hi) -> sfdcli::Setter {
+        return [dst, lo, hi](const std::string &v, std::string *why) {
+            long long x = 0;
+            if (!sfdcli::parse_int(v, lo, hi, &x, why)) return false;
+            *dst = static_cast<std::remove_pointer_t<decltype(dst)>>(x);
+            return true;
+        };
+    };
+    const auto real_opt = [](double *dst, double lo, double hi) -> sfdcli::Setter {
+        return [dst, lo, hi](const std::string &v, std::string *why) {
+            return sfdcli::parse_real(v, lo, hi, dst, why);
+        };
+    };
+    cli.section("Input and output");
+    cli.value("euroc", "DIR",
+              "standard layout: DIR/mav0 (or DIR = mav0) with imu0/data.csv,\n"
+              "camN/data.csv, camN/data/<ns>.png, camN/sensor.yaml and, if\n"
+              "present, state_groundtruth_estimate0/data.csv; explicit flags\n"
+              "override",
+              text_opt(&euroc));
+    cli.value("cam", "camN", "camera folder for --euroc (default cam0)", text_opt(&cam));
+    cli.value("images", "DIR", "image folder (8-bit grayscale PNG/JPEG, read as grayscale)",
+              text_opt(&images));
+    cli.value("frames", "CSV",
+              "EuRoC camera data.csv (timestamp [ns], file name); default:\n"
+              "every <ns>.png/.jpg in --images, by time",
+              text_opt(&frames_csv));
+    cli.value("imu", "CSV", "EuRoC imu0/data.csv (t [ns], gyro xyz [rad/s], accel xyz [m/s^2])",
+              text_opt(&imu_csv));
+    cli.value("calib", "YAML",
+              "EuRoC camera sensor.yaml (T_BS, resolution, intrinsics,\ndistortion)",
+              text_opt(&calib_yaml));
+    cli.value("gt", "CSV",
+              "EuRoC ground truth (t [ns], p xyz [m], q w x y z, ...): TRUTH\n"
+              "poses interpolated at the frame times (no spurious labels)",
+              text_opt(&gt_csv));
+    sfdcli::Option output;
+    output.name = "output";
+    output.short_name = 'o';
+    output.metavar = "OUT.lcmlog";
+    output.help = "the sfd log to write";
+    output.set = text_opt(&out_path);
+    cli.add(output);
+    cli.value("max-frames", "N", "convert the first N frames only (default: all)",
+              int_opt(&max_frames, 1, 100000000));
+    cli.value("imu-before-s", "S",
+              "IMU kept from S seconds before the first frame (default 1.0)\n"
+              "to the last frame; the count of samples left out is printed",
+              real_opt(&imu_before_s, 0.0, 1e6));
+    cli.value("camera-id", "ID", "camera_id of CAMERA_INFO and FEATURES (default 0)",
+              int_opt(&camera_id, 0, 2147483647));
+    cli.section("Tracker (drivers/opencv/sfd_feature_tracker.hpp)");
+    cli.value("max-features", "N",
+              "tracks per frame, 1.." + std::to_string(sfd::kTrackerMaxFeatures) + " (default 150)",
+              int_opt(&tc.max_features, 1, sfd::kTrackerMaxFeatures));
+    cli.value("min-distance-px", "PX", "spacing between tracks (default 20)",
+              real_opt(&tc.min_distance_px, 0.0, 1000.0));
+    cli.flag("no-fb-check", "plain pyramidal LK, no forward-backward check",
+             [&tc] { tc.fb_check = false; });
+    cli.value("fb-threshold-px", "PX", "forward-backward round-trip limit (default 1.0)",
+              real_opt(&tc.fb_threshold_px, 1e-6, 1000.0));
+    cli.value("quality-level", "Q", "Shi-Tomasi quality level (default 0.01)",
+              real_opt(&tc.quality_level, 1e-9, 0.999999));
+    cli.value("lk-window-px", "W", "LK window side, odd (default 21)",
+              int_opt(&tc.lk_window_px, 5, 101));
+    cli.value("lk-levels", "L", "LK pyramid levels (default 3)",
+              int_opt(&tc.lk_pyramid_levels, 0, 8));
+    cli.value("border-px", "PX", "image border without features (default 8)",
+              int_opt(&tc.border_px, 0, 1000));
+    cli.epilog(
+        "Exit: 0 ok, 2 bad usage or bad/missing input (the message names file and line),\n"
+        "1 write failure.");
+    std::vector<std::string> positional;
+    if (const int rc = cli.parse(argc, argv, &positional); rc >= 0) return rc;
+    if (!positional.empty()) return cli.fail("unexpected argument " + positional[0]);
     std::string err;
     if (!sfd::FeatureTracker::validate(tc, &err)) {
         std::fprintf(stderr, "%s: tracker: %s\n", kProg, err.c_str());
@@ -316,10 +301,8 @@ int main(int argc, char **argv) {
         if (gt_csv.empty() && file_exists(gt)) gt_csv = gt;
     }
     if (images.empty() || imu_csv.empty() || calib_yaml.empty() || out_path.empty()) {
-        std::fprintf(stderr, "%s: need --euroc DIR or --images, --imu and --calib; and -o\n",
-                     kProg);
-        usage(stderr);
-        return 2;
+        return cli.fail(
+            "need --euroc DIR or --images, --imu and --calib; and -o (sfd-euroc --help)");
     }
     // No output may be an input (docs/deploy.md, "Reading logs and writing outputs"): not one of
     // the files read, and not inside the image folder.
@@ -422,14 +405,18 @@ int main(int argc, char **argv) {
     static sfd_feature_frame_t ff;
     static sfd_truth_t tr;
     long features_total = 0, truth_written = 0, lost_fb = 0, lost_lk = 0;
+    sfdcli::Progress progress(kProg, "frames");  // a terminal only (stderr, CI unset)
+    long long frames_done = 0;
     for (const Frame &f : frames) {
+        progress.update(frames_done, double(frames_done) / double(frames.size()));
+        ++frames_done;
         // OpenCV reports some failures (corrupt files, internal checks) by exception: turned
         // into an error message naming the image, never a crash.
         cv::Mat img;
         try {
             img = cv::imread(f.path, cv::IMREAD_GRAYSCALE);
         } catch (const cv::Exception &e) {
-            std::fprintf(stderr, "%s: %s: %s\n", kProg, f.path.c_str(), e.what());
+            std::fprintf(stderr, "%s: %s: %s\n", kProg, f.path.c_str(), one_line(e.what()).c_str());
             return 2;
         }
         if (img.empty()) {
@@ -446,7 +433,7 @@ int main(int argc, char **argv) {
         try {
             tracked = tracker.track(img, &err);
         } catch (const cv::Exception &e) {
-            err = std::string("OpenCV: ") + e.what();
+            err = "OpenCV: " + one_line(e.what());
         }
         if (!tracked) {
             std::fprintf(stderr, "%s: %s: tracker: %s\n", kProg, f.path.c_str(), err.c_str());
@@ -480,6 +467,7 @@ int main(int argc, char **argv) {
             ++truth_written;
         }
     }
+    progress.finish(frames_done);
     std::sort(events.begin(), events.end(), [](const LogEvent &a, const LogEvent &b) {
         if (a.utime != b.utime) return a.utime < b.utime;
         if (a.rank != b.rank) return a.rank < b.rank;

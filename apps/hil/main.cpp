@@ -29,8 +29,11 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "flight_log.hpp"
 #include "sfd_app_config.hpp"
+#include "sfd_cli.hpp"
 #include "sfd_eval.hpp"
 #include "sfd_feature_frame_t.h"
 #include "sfd_feature_verdict_t.h"
@@ -84,7 +87,7 @@ struct Options {
     double rate = 1.0;
     long budget_us = 0;                                            // 0: no deadline
     enum BudgetOf { kNode, kE2e, kProcessing } budget_of = kNode;  // kBudgetOfNames
-    std::string csv, png;
+    std::string csv, png, json;
     long timeout_ms = 1000;
     long warmup = 10;
     bool restamp = true;
@@ -216,11 +219,17 @@ void on_timing(const lcm_recv_buf_t *rbuf, const char *, void *) {
 // Publishes the sensor messages over LCM: pacing, restamping, closed loop.
 class Publisher : public sfdsim::FlightSink {
   public:
-    Publisher(lcm_t *lcm, const sfdapp::Channels &ch, const Options &opt)
-        : lcm_(lcm), ch_(ch), opt_(opt) {}
+    /// `total`: the source's events (--log) or frames (--sim), for the progress line.
+    Publisher(lcm_t *lcm, const sfdapp::Channels &ch, const Options &opt, double total)
+        : lcm_(lcm), ch_(ch), opt_(opt), total_(total) {}
 
     bool message(const char *channel, int64_t utime, const uint8_t *data, int size) override {
         if (g_stop) return false;
+        ++events_;
+        if (progress_.enabled()) {
+            const double done = opt_.sim.empty() ? double(events_) : double(frame_index_);
+            progress_.update(frame_index_, total_ > 0 ? done / total_ : -1.0);
+        }
         const std::string *out = channel_of(channel);
         if (out == nullptr || size < 0) return true;  // not a sensor channel: not published
         buf_.assign(data, data + size);
@@ -345,6 +354,8 @@ class Publisher : public sfdsim::FlightSink {
     long frame_copies() const { return frame_copies_; }
 
     long published() const { return published_; }
+    /// Ends the progress line (terminal only).
+    void finish_progress() { progress_.finish(frame_index_); }
     long malformed() const { return malformed_; }
     long publish_failures() const { return publish_failures_; }
 
@@ -384,6 +395,9 @@ class Publisher : public sfdsim::FlightSink {
     lcm_t *lcm_;
     const sfdapp::Channels &ch_;
     const Options &opt_;
+    double total_;
+    long events_ = 0;
+    sfdcli::Progress progress_{"sfd-hil", "frames"};
     std::vector<uint8_t> buf_;
     sfd_feature_frame_t ff_{};
     bool started_ = false;
@@ -436,66 +450,6 @@ Stats stats_of(std::vector<double> v) {
     return sfdeval::spread_of(std::move(v));
 }
 
-void usage(FILE *out) {
-    std::fprintf(
-        out,
-        "usage: sfd-hil (--log IN.lcmlog | --sim SCENARIO [--frames N] [--features N]\n"
-        "               [--seed N] [--random-fraction F]) [--config F] [--rate R]\n"
-        "               [--budget-us N] [--budget-of e2e|node] [--lcm-url URL] [--csv OUT.csv]\n"
-        "               [--png OUT.png] [--timeout-ms N] [--warmup N] [--no-restamp]\n"
-        "  Publishes IMU, CAMERA_INFO, FEATURES and TRUTH to a running sfd-node over LCM,\n"
-        "  receives SFD_VERDICT and SFD_TIMING, and reports latency, jitter, deadline misses\n"
-        "  and lost messages (docs/hil.md).\n"
-        "  --log F            sensor messages from an LCM log (other channels are skipped)\n"
-        "  --sim S            a simulated flight generated on the fly: paper-uav, mistracking,\n"
-        "                     moving-object, worst-case (sfd-sim --help)\n"
-        "  --frames N         --sim: camera frames at 20 Hz (400)\n"
-        "  --features N       --sim: features per frame (200; worst-case %d)\n"
-        "  --seed N           --sim: seed (1)\n"
-        "  --random-fraction F  --sim worst-case: features replaced by random pixels (1.0)\n"
-        "  --config F         YAML configuration of the node (channels.*, lcm_url)\n"
-        "  --rate R           pace: R x the recorded pace (1.0); 0 = closed loop, each frame\n"
-        "                     published as soon as the previous verdict arrived or timed out\n"
-        "  --budget-us N      deadline per frame in us (none by default)\n"
-        "  --budget-of W      node: SFD_TIMING total_us (default); processing: total_us -\n"
-        "                     publish_us (the node without its sends); e2e: end-to-end\n"
-        "  --lcm-url URL      LCM provider (default: the config's, "
-        "udpm://239.255.76.67:7667?ttl=0)\n"
-        "  --csv F            one row per frame\n"
-        "  --png F            latency histogram (runs tools/plot_hil.py; $SFD_PYTHON and\n"
-        "                     $SFD_PLOT_HIL override the interpreter and the script)\n"
-        "  --timeout-ms N     a frame without verdict this long after its publish is lost (1000)\n"
-        "  --warmup N         first N frames left out of the latency figures (10)\n"
-        "  --no-restamp       publish the recorded utimes (default: shifted so that the first\n"
-        "                     message is at the wall-clock time now, so a running node accepts\n"
-        "                     repeated runs)\n"
-        "Fault injection (docs/hil.md; frame indexes count the source's frames from 0):\n"
-        "  --fault-drop P       drop a frame with probability P (in --fault-frames)\n"
-        "  --fault-dup P        publish a frame twice with probability P\n"
-        "  --fault-reorder P    publish a frame after the next one with probability P\n"
-        "  --fault-frames A:B   the frames the three above apply to (all)\n"
-        "  --fault-future-frame N   stamp frame N 1000 s in the future\n"
-        "  --fault-restart-frame N  from frame N on, stamp every message 100 s earlier (a\n"
-        "                       restarted publisher; the node's first N - 1 are refused)\n"
-        "  --fault-stall-frame N    stop publishing --fault-stall-ms before frame N, then go\n"
-        "                       on at the pace from there (every message late, none lost)\n"
-        "  --fault-stall-ms MS  (1000)\n"
-        "  --fault-seed N       seed of the fault draws (1)\n"
-        "SIGINT/SIGTERM: stop publishing, wait up to --timeout-ms for outstanding verdicts (a\n"
-        "second signal: at once), report what was measured.\n"
-        "Exit: 0 ok; 2 bad usage or input; 3 a frame missed the budget or messages were lost;\n"
-        "1 internal failure.\n",
-        SFD_MAX_FEATURES);
-}
-
-bool parse_double(const char *s, double lo, double hi, double *out) {
-    char *end = nullptr;
-    const double v = std::strtod(s, &end);
-    if (end == s || *end != '\0' || !(v >= lo && v <= hi)) return false;
-    *out = v;
-    return true;
-}
-
 // tools/plot_hil.py: $SFD_PLOT_HIL, else next to an installed sfd-hil (PREFIX/share/sfd), else
 // the source tree's. The interpreter: $SFD_PYTHON, else the project's venv, else python3.
 int run_plot(const std::string &csv, const std::string &png) {
@@ -534,109 +488,148 @@ int run_plot(const std::string &csv, const std::string &png) {
     return 0;
 }
 
-}  // namespace
-
-int main(int argc, char **argv) {
+int run(int argc, char **argv) {
     Options opt;
     sfdapp::AppConfig cfg;
     std::string err, config_path, lcm_url;
-    for (int i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        const bool has = i + 1 < argc;
-        long v = 0;
-        auto bad = [&](const char *what) {
-            std::fprintf(stderr, "sfd-hil: %s: expected %s, got %s\n", a, what, argv[i]);
-            return 2;
+    sfdcli::Parser cli(
+        "sfd-hil", "sfd-hil",
+        "(--log IN.lcmlog | --sim SCENARIO [--frames N] [--features N] [--seed N]\n"
+        "               [--random-fraction F]) [--config F] [--rate R] [--budget-us N]\n"
+        "               [--budget-of node|processing|e2e] [--lcm-url URL] [--csv OUT.csv]\n"
+        "               [--png OUT.png] [--json OUT.json] [--timeout-ms N] [--warmup N]\n"
+        "               [--no-restamp] [fault options]",
+        "  Publishes IMU, CAMERA_INFO, FEATURES and TRUTH to a running sfd-node over LCM,\n"
+        "  receives SFD_VERDICT and SFD_TIMING, and reports latency, jitter, deadline misses\n"
+        "  and lost messages (docs/hil.md). On a terminal (and CI unset), a progress line on\n"
+        "  stderr.");
+    const auto long_opt = [](long *dst, long long lo, long long hi) -> sfdcli::Setter {
+        return [dst, lo, hi](const std::string &v, std::string *why) {
+            long long x = 0;
+            if (!sfdcli::parse_int(v, lo, hi, &x, why)) return false;
+            *dst = static_cast<long>(x);
+            return true;
         };
-        if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
-            usage(stdout);
-            return 0;
-        } else if (!std::strcmp(a, "--log") && has) {
-            opt.log_path = argv[++i];
-        } else if (!std::strcmp(a, "--sim") && has) {
-            opt.sim = argv[++i];
-        } else if (!std::strcmp(a, "--config") && has) {
-            config_path = argv[++i];
-        } else if (!std::strcmp(a, "--frames") && has) {
-            if (!sfdapp::parse_long(argv[++i], 1, 1000000, &v)) return bad("1..1000000");
-            opt.frames = static_cast<int>(v);
-        } else if (!std::strcmp(a, "--features") && has) {
-            if (!sfdapp::parse_long(argv[++i], 1, SFD_MAX_FEATURES, &v))
-                return bad("1..SFD_MAX_FEATURES");
-            opt.features = static_cast<int>(v);
-        } else if (!std::strcmp(a, "--seed") && has) {
-            if (!sfdapp::parse_long(argv[++i], 0, 2147483647L, &v))
-                return bad("a non-negative integer");
-            opt.seed = static_cast<uint64_t>(v);
-        } else if (!std::strcmp(a, "--random-fraction") && has) {
-            if (!parse_double(argv[++i], 0.0, 1.0, &opt.random_fraction)) return bad("0..1");
-        } else if (!std::strcmp(a, "--rate") && has) {
-            if (!parse_double(argv[++i], 0.0, 1000.0, &opt.rate)) return bad("0..1000");
-        } else if (!std::strcmp(a, "--budget-us") && has) {
-            if (!sfdapp::parse_long(argv[++i], 1, 100000000, &v)) return bad("1..100000000");
-            opt.budget_us = v;
-        } else if (!std::strcmp(a, "--budget-of") && has) {
-            const std::string w = argv[++i];
-            if (w != "e2e" && w != "node" && w != "processing") {
-                return bad("node, processing or e2e");
-            }
-            opt.budget_of = w == "e2e"    ? Options::kE2e
-                            : w == "node" ? Options::kNode
-                                          : Options::kProcessing;
-        } else if (!std::strcmp(a, "--lcm-url") && has) {
-            lcm_url = argv[++i];
-        } else if (!std::strcmp(a, "--csv") && has) {
-            opt.csv = argv[++i];
-        } else if (!std::strcmp(a, "--png") && has) {
-            opt.png = argv[++i];
-        } else if (!std::strcmp(a, "--timeout-ms") && has) {
-            if (!sfdapp::parse_long(argv[++i], 1, 600000, &v)) return bad("1..600000");
-            opt.timeout_ms = v;
-        } else if (!std::strcmp(a, "--warmup") && has) {
-            if (!sfdapp::parse_long(argv[++i], 0, 10000000, &v)) return bad("0..10000000");
-            opt.warmup = v;
-        } else if (!std::strcmp(a, "--no-restamp")) {
-            opt.restamp = false;
-        } else if (!std::strcmp(a, "--fault-drop") && has) {
-            if (!parse_double(argv[++i], 0.0, 1.0, &opt.faults.drop)) return bad("0..1");
-        } else if (!std::strcmp(a, "--fault-dup") && has) {
-            if (!parse_double(argv[++i], 0.0, 1.0, &opt.faults.dup)) return bad("0..1");
-        } else if (!std::strcmp(a, "--fault-reorder") && has) {
-            if (!parse_double(argv[++i], 0.0, 1.0, &opt.faults.reorder)) return bad("0..1");
-        } else if (!std::strcmp(a, "--fault-frames") && has) {
-            const std::string r = argv[++i];
-            const size_t c = r.find(':');
-            long lo = 0, hi = 0;
-            if (c == std::string::npos ||
-                !sfdapp::parse_long(r.substr(0, c).c_str(), 0, 100000000, &lo) ||
-                !sfdapp::parse_long(r.substr(c + 1).c_str(), lo, 100000000, &hi)) {
-                return bad("A:B with 0 <= A <= B");
-            }
-            opt.faults.from = lo;
-            opt.faults.to = hi;
-        } else if (!std::strcmp(a, "--fault-future-frame") && has) {
-            if (!sfdapp::parse_long(argv[++i], 0, 100000000, &opt.faults.future_frame))
-                return bad("a frame index");
-        } else if (!std::strcmp(a, "--fault-restart-frame") && has) {
-            if (!sfdapp::parse_long(argv[++i], 0, 100000000, &opt.faults.restart_frame))
-                return bad("a frame index");
-        } else if (!std::strcmp(a, "--fault-stall-frame") && has) {
-            if (!sfdapp::parse_long(argv[++i], 0, 100000000, &opt.faults.stall_frame))
-                return bad("a frame index");
-            if (opt.faults.stall_ms == 0) opt.faults.stall_ms = 1000;
-        } else if (!std::strcmp(a, "--fault-stall-ms") && has) {
-            if (!sfdapp::parse_long(argv[++i], 1, 600000, &opt.faults.stall_ms))
-                return bad("1..600000");
-        } else if (!std::strcmp(a, "--fault-seed") && has) {
-            if (!sfdapp::parse_long(argv[++i], 0, 2147483647L, &v))
-                return bad("a non-negative integer");
-            opt.faults.seed = static_cast<uint64_t>(v);
-        } else {
-            std::fprintf(stderr, "sfd-hil: unknown or incomplete option: %s\n", a);
-            usage(stderr);
-            return 2;
-        }
-    }
+    };
+    const auto real_opt = [](double *dst, double lo, double hi) -> sfdcli::Setter {
+        return [dst, lo, hi](const std::string &v, std::string *why) {
+            return sfdcli::parse_real(v, lo, hi, dst, why);
+        };
+    };
+    const auto text_opt = [](std::string *dst) -> sfdcli::Setter {
+        return [dst](const std::string &v, std::string *) {
+            *dst = v;
+            return true;
+        };
+    };
+    long frames = opt.frames, features = opt.features, seed = 1, fault_seed = 1;
+    cli.section("Source");
+    cli.value("log", "F", "sensor messages from an LCM log (other channels are skipped)",
+              text_opt(&opt.log_path));
+    cli.value("sim", "S",
+              "a simulated flight generated on the fly: paper-uav, mistracking,\n"
+              "moving-object, worst-case (sfd-sim --help)",
+              text_opt(&opt.sim));
+    cli.value("frames", "N", "--sim: camera frames at 20 Hz (400)", long_opt(&frames, 1, 1000000));
+    cli.value(
+        "features", "N",
+        "--sim: features per frame (200; worst-case " + std::to_string(SFD_MAX_FEATURES) + ")",
+        long_opt(&features, 1, SFD_MAX_FEATURES));
+    cli.value("seed", "N", "--sim: seed (1)", long_opt(&seed, 0, 2147483647LL));
+    cli.value("random-fraction", "F", "--sim worst-case: features replaced by random pixels (1.0)",
+              real_opt(&opt.random_fraction, 0.0, 1.0));
+    cli.section("Node and pacing");
+    cli.value("config", "F", "YAML configuration of the node (channels.*, lcm_url)",
+              text_opt(&config_path));
+    cli.value("lcm-url", "URL",
+              "LCM provider (default: the config's, udpm://239.255.76.67:7667?ttl=0)",
+              text_opt(&lcm_url));
+    cli.value("rate", "R",
+              "pace: R x the recorded pace (1.0); 0 = closed loop, each frame\n"
+              "published as soon as the previous verdict arrived or timed out",
+              real_opt(&opt.rate, 0.0, 1000.0));
+    cli.value("budget-us", "N", "deadline per frame in us (none by default)",
+              long_opt(&opt.budget_us, 1, 100000000));
+    cli.value("budget-of", "W",
+              "node: SFD_TIMING total_us (default); processing: total_us -\n"
+              "publish_us (the node without its sends); e2e: end-to-end",
+              [&opt](const std::string &w, std::string *why) {
+                  if (w != "e2e" && w != "node" && w != "processing") {
+                      *why = "is not one of node, processing, e2e";
+                      return false;
+                  }
+                  opt.budget_of = w == "e2e"    ? Options::kE2e
+                                  : w == "node" ? Options::kNode
+                                                : Options::kProcessing;
+                  return true;
+              });
+    cli.value("timeout-ms", "N",
+              "a frame without verdict this long after its publish is lost (1000)",
+              long_opt(&opt.timeout_ms, 1, 600000));
+    cli.value("warmup", "N", "first N frames left out of the latency figures (10)",
+              long_opt(&opt.warmup, 0, 10000000));
+    cli.flag("no-restamp",
+             "publish the recorded utimes (default: shifted so that the first\n"
+             "message is at the wall-clock time now, so a running node accepts\n"
+             "repeated runs)",
+             [&opt] { opt.restamp = false; });
+    cli.section("Outputs");
+    cli.value("csv", "F", "one row per frame", text_opt(&opt.csv));
+    cli.value("png", "F",
+              "latency histogram (runs tools/plot_hil.py; $SFD_PYTHON and\n"
+              "$SFD_PLOT_HIL override the interpreter and the script); needs --csv",
+              text_opt(&opt.png));
+    cli.value("json", "F",
+              "the report as JSON (the figures of the printed tables: counts,\n"
+              "losses, latency percentiles and max, misses, node counters)",
+              text_opt(&opt.json));
+    cli.section("Fault injection (docs/hil.md; frame indexes count the source's frames from 0)");
+    cli.value("fault-drop", "P", "drop a frame with probability P (in --fault-frames)",
+              real_opt(&opt.faults.drop, 0.0, 1.0));
+    cli.value("fault-dup", "P", "publish a frame twice with probability P",
+              real_opt(&opt.faults.dup, 0.0, 1.0));
+    cli.value("fault-reorder", "P", "publish a frame after the next one with probability P",
+              real_opt(&opt.faults.reorder, 0.0, 1.0));
+    cli.value("fault-frames", "A:B", "the frames the three above apply to (all)",
+              [&opt](const std::string &r, std::string *why) {
+                  const size_t c = r.find(':');
+                  long long lo = 0, hi = 0;
+                  if (c == std::string::npos ||
+                      !sfdcli::parse_int(r.substr(0, c), 0, 100000000, &lo, why) ||
+                      !sfdcli::parse_int(r.substr(c + 1), lo, 100000000, &hi, why)) {
+                      *why = "is not A:B with 0 <= A <= B <= 100000000";
+                      return false;
+                  }
+                  opt.faults.from = static_cast<long>(lo);
+                  opt.faults.to = static_cast<long>(hi);
+                  return true;
+              });
+    cli.value("fault-future-frame", "N", "stamp frame N 1000 s in the future",
+              long_opt(&opt.faults.future_frame, 0, 100000000));
+    cli.value("fault-restart-frame", "N",
+              "from frame N on, stamp every message 100 s earlier (a\n"
+              "restarted publisher; the node's first N - 1 are refused)",
+              long_opt(&opt.faults.restart_frame, 0, 100000000));
+    cli.value("fault-stall-frame", "N",
+              "stop publishing --fault-stall-ms before frame N, then go\n"
+              "on at the pace from there (every message late, none lost)",
+              long_opt(&opt.faults.stall_frame, 0, 100000000));
+    cli.value("fault-stall-ms", "MS", "(1000)", long_opt(&opt.faults.stall_ms, 1, 600000));
+    cli.value("fault-seed", "N", "seed of the fault draws (1)",
+              long_opt(&fault_seed, 0, 2147483647LL));
+    cli.epilog(
+        "SIGINT/SIGTERM: stop publishing, wait up to --timeout-ms for outstanding verdicts (a\n"
+        "second signal: at once), report what was measured.\n"
+        "Exit: 0 ok; 2 bad usage or input; 3 a frame missed the budget or messages were lost;\n"
+        "1 internal failure.");
+    std::vector<std::string> positional;
+    if (const int rc = cli.parse(argc, argv, &positional); rc >= 0) return rc;
+    if (!positional.empty()) return cli.fail("unexpected argument " + positional[0]);
+    opt.frames = static_cast<int>(frames);
+    opt.features = static_cast<int>(features);
+    opt.seed = static_cast<uint64_t>(seed);
+    opt.faults.seed = static_cast<uint64_t>(fault_seed);
+    if (opt.faults.stall_frame >= 0 && opt.faults.stall_ms == 0) opt.faults.stall_ms = 1000;
     if (opt.faults.drop + opt.faults.dup + opt.faults.reorder > 1.0) {
         std::fprintf(stderr, "sfd-hil: --fault-drop + --fault-dup + --fault-reorder exceed 1\n");
         return 2;
@@ -657,10 +650,11 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (!lcm_url.empty()) cfg.lcm_url = lcm_url;
-    // No output (--csv, --png) may be an input (--log, --config) or the other output.
+    // No output (--csv, --png, --json) may be an input (--log, --config) or another output.
     const std::pair<const char *, std::string> ins[2] = {{"--log", opt.log_path},
                                                          {"--config", config_path}};
-    const std::pair<const char *, std::string> outs[2] = {{"--csv", opt.csv}, {"--png", opt.png}};
+    const std::pair<const char *, std::string> outs[3] = {
+        {"--csv", opt.csv}, {"--png", opt.png}, {"--json", opt.json}};
     for (const auto &o : outs) {
         for (const auto &in : ins) {
             if (o.second.empty() || in.second.empty()) continue;
@@ -673,18 +667,23 @@ int main(int argc, char **argv) {
             }
         }
     }
-    if (!opt.csv.empty() && !opt.png.empty() && sfd_same_file(opt.csv.c_str(), opt.png.c_str())) {
-        std::fprintf(stderr, "sfd-hil: --csv %s and --png %s are the same file\n", opt.csv.c_str(),
-                     opt.png.c_str());
-        return 2;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < i; ++j) {
+            if (!outs[i].second.empty() && !outs[j].second.empty() &&
+                sfd_same_file(outs[i].second.c_str(), outs[j].second.c_str())) {
+                std::fprintf(stderr, "sfd-hil: %s %s and %s %s are the same file\n", outs[j].first,
+                             outs[j].second.c_str(), outs[i].first, outs[i].second.c_str());
+                return 2;
+            }
+        }
     }
     if (!opt.png.empty() && opt.csv.empty()) {
         std::fprintf(stderr, "sfd-hil: --png needs --csv (the plot reads the CSV)\n");
         return 2;
     }
+    long log_events = 0;          // the log's events (progress: fraction published)
     if (!opt.log_path.empty()) {  // the whole log is checked before anything is published
-        long checked = 0;
-        if (play_log(opt.log_path, nullptr, &checked, &err) != 0) {
+        if (play_log(opt.log_path, nullptr, &log_events, &err) != 0) {
             std::fprintf(stderr, "sfd-hil: --log: %s\n", err.c_str());
             return 2;
         }
@@ -705,6 +704,19 @@ int main(int argc, char **argv) {
         if (csv == nullptr) {
             std::fprintf(stderr, "sfd-hil: --csv %s: cannot open for writing (%s)\n",
                          opt.csv.c_str(), std::strerror(errno));
+            return 1;
+        }
+    }
+    // --json: the report, renamed into place when complete (as --csv).
+    struct JsonOut {
+        sfd_out_t out{};
+        ~JsonOut() { sfd_out_discard(&out); }
+    } json_out;
+    if (!opt.json.empty()) {
+        char oerr[8192];
+        if (sfd_out_begin(&json_out.out, opt.json.c_str(), oerr, sizeof oerr) != 0) {
+            std::fprintf(stderr, "sfd-hil: --json %s\n", oerr);
+            if (csv != nullptr) std::fclose(csv);
             return 1;
         }
     }
@@ -754,7 +766,8 @@ int main(int argc, char **argv) {
                 cfg.channels.features.c_str(), rate, cfg.lcm_url.c_str());
     std::fflush(stdout);
 
-    Publisher pub(tx, cfg.channels, opt);
+    Publisher pub(tx, cfg.channels, opt,
+                  opt.sim.empty() ? static_cast<double>(log_events) : double(opt.frames));
     pub.set_resync_messages(cfg.node.time.resync_messages);
     int input_rc = 0;
     long events = 0;
@@ -771,6 +784,7 @@ int main(int argc, char **argv) {
         input_rc = play_log(opt.log_path, &pub, &events, &err);
         if (input_rc != 0) std::fprintf(stderr, "sfd-hil: --log: %s\n", err.c_str());
     }
+    pub.finish_progress();
     // Outstanding verdicts and timings: until every frame has both, or the last publish is
     // --timeout-ms old; a second signal ends the wait.
     {
@@ -955,6 +969,95 @@ int main(int argc, char **argv) {
     std::fflush(stdout);
 
     int rc = fail ? 3 : 0;
+    if (!opt.json.empty()) {
+        // The figures of the tables above, by the same names; null where nothing was measured.
+        using json = nlohmann::ordered_json;
+        const auto stats_json = [](const Stats &st) {
+            if (st.n == 0) return json(nullptr);
+            return json{{"n", st.n},       {"min", st.min}, {"median", st.median}, {"p99", st.p99},
+                        {"p999", st.p999}, {"max", st.max}, {"mean", st.mean},     {"std", st.sd}};
+        };
+        json rejected = json::object();
+        for (int k = 0; k < SFD_TIMING_T_NUM_REASONS; ++k) {
+            rejected[sfd_reject_reason_str(k)] = json{
+                {"during_run", static_cast<long long>(g.last_rejected[k] - g.first_rejected[k])},
+                {"since_node_start", static_cast<long long>(g.last_rejected[k])}};
+        }
+        json j;
+        j["source"] = source;
+        j["rate"] = opt.rate;
+        j["timeout_ms"] = opt.timeout_ms;
+        j["warmup"] = opt.warmup;
+        j["frames_published"] = static_cast<long long>(fr.size());
+        j["messages_published"] = pub.published();
+        j["verdicts_received"] = g.verdicts;
+        j["timing_received"] = g.timings;
+        j["status_reports"] = static_cast<long long>(g.status_reports);
+        j["lost"] = json{{"total", lost},
+                         {"frames_without_verdict", no_verdict + late},
+                         {"late", late},
+                         {"verdicts_for_unknown_frames", g.unknown_verdicts},
+                         {"node_side_drops", opt.faults.any() ? unexplained_drops : node_drops}};
+        if (opt.faults.any()) {
+            j["faults"] = json{{"dropped", pub.dropped()},
+                               {"duplicated", pub.duplicated()},
+                               {"reordered", pub.reordered()},
+                               {"future_stamped", pub.future()},
+                               {"restarts", pub.restarts()},
+                               {"stalls", pub.stalls()},
+                               {"frame_copies_published", pub.frame_copies()},
+                               {"frames_received_by_node", received},
+                               {"frames_judged", judged},
+                               {"frames_refused_by_node", frame_refusals},
+                               {"every_frame_accounted_for", accounted},
+                               {"refused_frames_judged", refused_judged},
+                               {"expected_node_side_drops", expected_drops}};
+        }
+        j["node_rejected"] = rejected;
+        j["input_features_malformed"] = pub.malformed();
+        j["publish_failures"] = pub.publish_failures();
+        j["frames_measured"] = measured;
+        j["frames_measured_with_timing"] = timed;
+        j["latency_us"] = json{{"end_to_end", stats_json(se)},
+                               {"node_total", stats_json(sn)},
+                               {"node_processing", stats_json(sc)},
+                               {"node_publish", stats_json(sb)}};
+        if (opt.rate > 0) {
+            j["pacing_us"] = json{{"lateness", stats_json(sl)}, {"period_error", stats_json(sp)}};
+        } else {
+            j["pacing_us"] = nullptr;  // closed loop: no schedule
+        }
+        j["hypotheses_per_frame"] =
+            json{{"mean", timed ? hyp_sum / double(timed) : 0.0}, {"max", hyp_max}};
+        j["frames_budget_exhausted"] = exhausted;
+        if (opt.budget_us > 0) {
+            j["deadline"] = json{{"budget_us", opt.budget_us},
+                                 {"of", kBudgetOfNames[opt.budget_of]},
+                                 {"misses", misses},
+                                 {"frames", measured}};
+        } else {
+            j["deadline"] = nullptr;
+        }
+        j["result"] = input_error     ? "input error"
+                      : input_rc == 1 ? "internal failure"
+                      : fail          ? "FAIL"
+                                      : "ok";
+        j["interrupted"] = g_stop != 0;
+        const std::string text = j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
+        std::FILE *jf = std::fopen(json_out.out.write_path, "w");
+        char oerr[8192];
+        bool ok = jf != nullptr;
+        if (ok) {
+            ok = std::fwrite(text.data(), 1, text.size(), jf) == text.size();
+            ok = sfd_close_checked(jf) == 0 && ok;
+        }
+        if (!ok || sfd_out_commit(&json_out.out, oerr, sizeof oerr) != 0) {
+            std::fprintf(stderr, "sfd-hil: --json %s: write failed (%s)\n", opt.json.c_str(),
+                         std::strerror(errno));
+            if (csv != nullptr) std::fclose(csv);
+            return 1;
+        }
+    }
     if (csv != nullptr) {
         std::fprintf(csv,
                      "frame,utime,features,sched_lateness_us,e2e_us,node_total_us,ingest_us,"
@@ -1015,4 +1118,17 @@ int main(int argc, char **argv) {
     (void)events;
     (void)fst;
     return rc;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    try {
+        return run(argc, argv);
+    } catch (const std::exception &e) {  // std::bad_alloc, a JSON encoding failure
+        std::fprintf(stderr, "sfd-hil: %s\n", e.what());
+    } catch (...) {
+        std::fprintf(stderr, "sfd-hil: unexpected failure\n");
+    }
+    return 1;
 }

@@ -19,7 +19,9 @@
 #include <string>
 #include <vector>
 
+#include "sfd_app_cli.hpp"
 #include "sfd_app_config.hpp"
+#include "sfd_cli.hpp"
 #include "sfd_node_core.h"
 
 namespace {
@@ -156,132 +158,51 @@ bool lock_memory(const Realtime &rt) {
     return true;
 }
 
-void usage(FILE *f) {
-    std::fprintf(
-        f,
-        "usage: sfd-node [--config F] [--lcm-url URL] [--method M]\n"
-        "                [--imu-channel C] [--camera-info-channel C]\n"
-        "                [--features-channel C] [--verdict-channel C] [--timing-channel C]\n"
-        "                [--state-channel C] [--truth-channel C] [--sched-fifo P] [--cpu N]\n"
-        "                [--lock-memory]\n"
-        "  Subscribes IMU, CAMERA_INFO, FEATURES (and TRUTH with filter.init_from_truth:\n"
-        "  1, evaluation only); publishes SFD_VERDICT, SFD_STATE, SFD_TIMING.\n"
-        "  --config F    YAML configuration (apps/config/sfd.yaml documents every key)\n"
-        "  --lcm-url     LCM provider (default udpm://239.255.76.67:7667?ttl=0)\n"
-        "  --method M    none | parity | oprf | ransac1 | ransacf | both\n"
-        "  Real-time set-up (docs/hil.md): scheduler and CPU before LCM starts its receive\n"
-        "  thread, which inherits them; any that fails stops the node (exit 1) with the reason:\n"
-        "  --sched-fifo P  run at SCHED_FIFO priority P (1..99; needs CAP_SYS_NICE)\n"
-        "  --cpu N         pin the process to CPU N (e.g. one kept free with isolcpus)\n"
-        "  --lock-memory   mlockall(current and future) and pre-fault 256 KiB of stack, so no\n"
-        "                  page fault lands in a frame (needs CAP_IPC_LOCK or ulimit -l)\n"
-        "  Options also as --opt=value. The configuration (files, then the flags over\n"
-        "  them) is validated as a whole, as by sfd-replay; the first bad key is exit 2\n"
-        "  naming its file or flag, the key and the value, before LCM starts.\n"
-        "Stops on SIGINT/SIGTERM. Exit: 0 ok, 2 bad usage or configuration, 1 internal.\n");
-}
-
-// Options that take a value (also accepted as --opt=value).
-const std::set<std::string> kValueOptions = {"--config",
-                                             "--lcm-url",
-                                             "--method",
-                                             "--imu-channel",
-                                             "--camera-info-channel",
-                                             "--features-channel",
-                                             "--verdict-channel",
-                                             "--timing-channel",
-                                             "--state-channel",
-                                             "--truth-channel",
-                                             "--sched-fifo",
-                                             "--cpu"};
-
 }  // namespace
 
-int main(int argc_in, char **argv_in) {
+int main(int argc, char **argv) {
     sfdapp::AppConfig &cfg = g_app.cfg;
-    std::string err;
     Realtime rt;
-    std::vector<std::string> words = sfdapp::split_options(argc_in, argv_in, kValueOptions);
-    std::vector<char *> args;
-    args.reserve(words.size());
-    for (std::string &w : words) args.push_back(&w[0]);
-    const int argc = static_cast<int>(args.size());
-    char **argv = args.data();
-    // The config files first, then the flags over them, then one validation of the result
-    // (sfdapp::validate, the same as sfd-replay's): any bad key is exit 2 before LCM starts.
-    for (int i = 1; i + 1 < argc; ++i) {
-        if (!std::strcmp(argv[i], "--config")) {
-            if (!sfdapp::read_config(argv[i + 1], &cfg, &err)) {
-                std::fprintf(stderr, "sfd-node: %s\n", err.c_str());
-                return 2;
-            }
-        }
-    }
-    // A flag that sets a key of the configuration: the key's origin in error messages.
-    struct ChannelFlag {
-        const char *flag;
-        const char *key;
-        std::string *dst;
-    } const channel_flags[] = {
-        {"--imu-channel", "channels.imu", &cfg.channels.imu},
-        {"--camera-info-channel", "channels.camera_info", &cfg.channels.camera_info},
-        {"--features-channel", "channels.features", &cfg.channels.features},
-        {"--verdict-channel", "channels.verdict", &cfg.channels.verdict},
-        {"--timing-channel", "channels.timing", &cfg.channels.timing},
-        {"--state-channel", "channels.state", &cfg.channels.state},
-        {"--truth-channel", "channels.truth", &cfg.channels.truth}};
-    for (int i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        const bool has = i + 1 < argc;
-        const ChannelFlag *channel = nullptr;
-        for (const ChannelFlag &f : channel_flags) {
-            if (!std::strcmp(a, f.flag)) channel = &f;
-        }
-        if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
-            usage(stdout);
-            return 0;
-        } else if (!std::strcmp(a, "--config") && has) {
-            ++i;
-        } else if (!std::strcmp(a, "--lcm-url") && has) {
-            cfg.lcm_url = argv[++i];
-            cfg.origin["lcm_url"] = a;
-        } else if (!std::strcmp(a, "--method") && has) {
-            if (!sfdapp::set_method(argv[++i], &cfg, &err)) {
-                std::fprintf(stderr, "sfd-node: --method %s: %s\n", argv[i], err.c_str());
-                return 2;
-            }
-            cfg.origin["method"] = a;
-        } else if (channel != nullptr && has) {
-            *channel->dst = argv[++i];
-            cfg.origin[channel->key] = a;
-        } else if (!std::strcmp(a, "--sched-fifo") && has) {
-            long v = 0;
-            if (!sfdapp::parse_long(argv[++i], 1, 99, &v)) {
-                std::fprintf(stderr,
-                             "sfd-node: --sched-fifo: expected a priority 1..99, got '%s'\n",
-                             argv[i]);
-                return 2;
-            }
-            rt.fifo_priority = static_cast<int>(v);
-        } else if (!std::strcmp(a, "--cpu") && has) {
-            long v = 0;
-            if (!sfdapp::parse_long(argv[++i], 0, CPU_SETSIZE - 1, &v)) {
-                std::fprintf(stderr, "sfd-node: --cpu: expected a CPU number, got '%s'\n", argv[i]);
-                return 2;
-            }
-            rt.cpu = static_cast<int>(v);
-        } else if (!std::strcmp(a, "--lock-memory")) {
-            rt.lock_memory = true;
-        } else {
-            std::fprintf(stderr, "sfd-node: unknown or incomplete option: %s\n", a);
-            usage(stderr);
-            return 2;
-        }
-    }
-    if (!sfdapp::validate(cfg, &err)) {
-        std::fprintf(stderr, "sfd-node: %s\n", err.c_str());
-        return 2;
-    }
+    // The same parser and configuration flags as sfd-replay (apps/common/sfd_app_cli.hpp): the
+    // config files first, then the flags over them, then one validation of the result
+    // (sfdapp::validate): any bad key is exit 2 before LCM starts.
+    sfdcli::Parser cli(
+        "sfd-node", "sfd-node",
+        "[--config F] [--lcm-url URL] [--KEY VALUE ...] [real-time options]",
+        "  The onboard process: subscribes IMU, CAMERA_INFO, FEATURES (and TRUTH with\n"
+        "  filter.init_from_truth: 1, evaluation only); publishes SFD_VERDICT, SFD_STATE,\n"
+        "  SFD_TIMING. Stops on SIGINT/SIGTERM.");
+    sfdapp::ConfigCommandLine config;
+    config.add_to(&cli);
+    cli.section(
+        "Real-time set-up (docs/hil.md): scheduler and CPU before LCM starts its receive\n"
+        "thread, which inherits them; any that fails stops the node (exit 1) with the reason");
+    cli.value("sched-fifo", "P", "run at SCHED_FIFO priority P (1..99; needs CAP_SYS_NICE)",
+              [&rt](const std::string &v, std::string *why) {
+                  long long p = 0;
+                  if (!sfdcli::parse_int(v, 1, 99, &p, why)) return false;
+                  rt.fifo_priority = static_cast<int>(p);
+                  return true;
+              });
+    cli.value("cpu", "N", "pin the process to CPU N (e.g. one kept free with isolcpus)",
+              [&rt](const std::string &v, std::string *why) {
+                  long long c = 0;
+                  if (!sfdcli::parse_int(v, 0, CPU_SETSIZE - 1, &c, why)) return false;
+                  rt.cpu = static_cast<int>(c);
+                  return true;
+              });
+    cli.flag("lock-memory",
+             "mlockall(current and future) and pre-fault 256 KiB of stack, so no\n"
+             "page fault lands in a frame (needs CAP_IPC_LOCK or ulimit -l)",
+             [&rt] { rt.lock_memory = true; });
+    cli.epilog(
+        "The configuration (files, then the flags over them) is validated as a whole, as by\n"
+        "sfd-replay; the first bad key is exit 2 naming its file or flag, the key and the value.\n"
+        "Exit: 0 ok, 2 bad usage or configuration, 1 internal.");
+    std::vector<std::string> positional;
+    if (const int rc = cli.parse(argc, argv, &positional); rc >= 0) return rc;
+    if (!positional.empty()) return cli.fail("unexpected argument " + positional[0]);
+    if (const int rc = config.load("sfd-node", &cfg); rc != 0) return rc;
     if (sfd_node_init(&g_node, &cfg.node, on_publish, clock_us, &g_app) != SFD_OK) {
         std::fprintf(stderr,
                      "sfd-node: internal: node initialization failed on a validated "
@@ -314,9 +235,10 @@ int main(int argc_in, char **argv_in) {
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     const double *b = cfg.node.params.gyro_bias_rad_s;
-    std::printf("sfd-node %d.%d: method %s, alpha %g, L %d, n %d, lcm %s\n", SFD_VERSION_MAJOR,
-                SFD_VERSION_MINOR, cfg.method.c_str(), cfg.node.params.false_alarm_rate,
-                cfg.node.params.window_frames, cfg.node.params.group_size, cfg.lcm_url.c_str());
+    std::printf("sfd-node %s: method %s, alpha %g, L %d, n %d, lcm %s\n",
+                sfdcli::version_string().c_str(), cfg.method.c_str(),
+                cfg.node.params.false_alarm_rate, cfg.node.params.window_frames,
+                cfg.node.params.group_size, cfg.lcm_url.c_str());
     if (rt.fifo_priority > 0 || rt.cpu >= 0 || rt.lock_memory) {
         std::printf("sfd-node: real-time: scheduler %s, CPU %s, memory %s\n",
                     rt.fifo_priority > 0

@@ -23,7 +23,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "sfd_app_cli.hpp"
 #include "sfd_app_config.hpp"
+#include "sfd_cli.hpp"
 #include "sfd_eval.hpp"
 #include "sfd_lcm_codec.h"
 #include "sfd_log_reader.h"
@@ -225,159 +227,88 @@ bool outputs_distinct(const std::vector<std::pair<const char *, std::string>> &i
     return true;
 }
 
-void usage(FILE *f) {
-    std::fprintf(
-        f,
-        "usage: sfd-replay IN.lcmlog [--config F] [-o OUT.lcmlog] [--summary S.json] [--method M]\n"
-        "                  [--alpha A] [--window L] [--group n] [--pixel-sigma PX]\n"
-        "                  [--depth-default M] [--no-isolation] [--salvage]\n"
-        "       sfd-replay IN.lcmlog --score-only [--config F] [--summary S.json] [--salvage]\n"
-        "  Plays IN through the node's code path as fast as possible.\n"
-        "  IN must be an LCM log: the first bad event (no sync word where an event\n"
-        "  starts, a channel length outside 1..999 or a negative data length, an event\n"
-        "  running past the end of the file) is exit 2 naming IN and its byte offset;\n"
-        "  an empty file, a directory or anything else that is not a regular file is\n"
-        "  exit 2 too.\n"
-        "  --salvage   skip bad events instead (resynchronizing on the next sync word\n"
-        "              that starts a good event); the summary counts them (\"log\":\n"
-        "              bad_events, bytes_skipped); a file with no good event is still\n"
-        "              exit 2\n"
-        "  --score-only  run no node: score the SFD_VERDICT and SFD_STATE already in IN\n"
-        "              (a recorded sfd-node run, or a previous -o) against its TRUTH\n"
-        "  -o          write the input events and the published SFD_VERDICT/SFD_STATE/\n"
-        "              SFD_TIMING\n"
-        "  --summary   JSON summary (scored against TRUTH when the log has it); wall-\n"
-        "              clock timing goes to S.timing.json\n"
-        "  --method    none | parity | oprf | ransac1 | ransacf | both (default: the\n"
-        "              config's, parity); oprf, ransac1, ransacf, both need filter.enabled\n"
-        "  TRUTH in IN scores the verdicts (every labelled feature counts: an UNTESTED\n"
-        "  spurious one is a miss) and the SFD_STATE poses (ATE after position+yaw\n"
-        "  alignment, raw RMSE, drift, RPE, NEES; docs/evaluation.md). With\n"
-        "  filter.init_from_truth: 1 the filter starts from TRUTH instead of at rest.\n"
-        "Outputs: an output (-o, --summary, S.timing.json) that is an input (IN,\n"
-        "  --config) or another output (a character device such as /dev/null aside),\n"
-        "  by path or by file (hard or symbolic link), is exit 2 before anything is\n"
-        "  written. Outputs are written to a temporary file in their directory and\n"
-        "  renamed into place when the run succeeds (special files such as /dev/null\n"
-        "  are written directly); a failed write is exit 1 naming the path, and a\n"
-        "  failed run leaves no output behind (an older one stays as it was).\n"
-        "Configuration: --config files (several: later keys win), then the flags over\n"
-        "  them (--alpha false_alarm_rate, --window window_frames, --group group_size,\n"
-        "  --pixel-sigma pixel_sigma_px, --depth-default default_depth_m, --no-isolation\n"
-        "  parity_isolation: 0), validated as a whole as by sfd-node: the first bad key\n"
-        "  is exit 2 naming its file or flag, the key and the value. Options also as\n"
-        "  --opt=value.\n"
-        "Exit: 0 ok, 2 bad usage or bad input (a one-line reason naming the file),\n"
-        "  1 internal failure or a failed write.\n");
-}
-
-// Options that take a value (also accepted as --opt=value).
-const std::set<std::string> kValueOptions = {
-    "--config", "-o",      "--summary",     "--method",       "--alpha",
-    "--window", "--group", "--pixel-sigma", "--depth-default"};
-
-int run(int argc_in, char **argv_in) {
-    std::vector<std::string> words = sfdapp::split_options(argc_in, argv_in, kValueOptions);
-    std::vector<char *> args;
-    args.reserve(words.size());
-    for (std::string &w : words) args.push_back(&w[0]);
-    const int argc = static_cast<int>(args.size());
-    char **argv = args.data();
+int run(int argc, char **argv) {
     const char *in_path = nullptr, *out_path = nullptr, *summary_path = nullptr;
+    std::string in_arg, out_arg, summary_arg;
     bool score_only = false, salvage = false;
-    std::vector<std::pair<const char *, std::string>> inputs;
     sfdapp::AppConfig app_cfg;
-    std::string err;
-    // The config files first, then the flags over them, then one validation of the result
-    // (sfdapp::validate, the same as sfd-node's).
-    for (int i = 1; i + 1 < argc; ++i) {
-        if (!std::strcmp(argv[i], "--config") &&
-            !sfdapp::read_config(argv[i + 1], &app_cfg, &err)) {
-            std::fprintf(stderr, "sfd-replay: %s\n", err.c_str());
-            return 2;
-        }
+    // The same parser and configuration flags as sfd-node (apps/common/sfd_app_cli.hpp).
+    sfdcli::Parser cli(
+        "sfd-replay", "sfd-replay",
+        "IN.lcmlog [-o OUT.lcmlog] [--summary S.json] [--config F] [--KEY VALUE ...]\n"
+        "       sfd-replay IN.lcmlog --score-only [--summary S.json] [--config F] [--salvage]",
+        "  Plays IN through the node's code path as fast as possible. IN must be an LCM log:\n"
+        "  the first bad event (no sync word where an event starts, a channel length outside\n"
+        "  1..999 or a negative data length, an event running past the end of the file) is\n"
+        "  exit 2 naming IN and its byte offset; an empty file, a directory or anything else\n"
+        "  that is not a regular file is exit 2 too. TRUTH in IN scores the verdicts (every\n"
+        "  labelled feature counts: an UNTESTED spurious one is a miss) and the SFD_STATE\n"
+        "  poses (ATE after position+yaw alignment, raw RMSE, drift, RPE, NEES;\n"
+        "  docs/evaluation.md). With filter.init_from_truth: 1 the filter starts from TRUTH\n"
+        "  instead of at rest. On a terminal (and CI unset), a progress line on stderr.");
+    cli.section("Input and outputs");
+    sfdcli::Option out;
+    out.name = "output";
+    out.short_name = 'o';
+    out.metavar = "OUT.lcmlog";
+    out.help =
+        "write the input events and the published SFD_VERDICT,\n"
+        "SFD_STATE and SFD_TIMING";
+    out.set = [&out_arg, &out_path](const std::string &v, std::string *) {
+        out_arg = v;
+        out_path = out_arg.c_str();
+        return true;
+    };
+    cli.add(out);
+    cli.value("summary", "S.json",
+              "JSON summary (scored against TRUTH when the log has\n"
+              "it); wall-clock timing goes to S.json.timing.json",
+              [&summary_arg, &summary_path](const std::string &v, std::string *) {
+                  summary_arg = v;
+                  summary_path = summary_arg.c_str();
+                  return true;
+              });
+    cli.flag("score-only",
+             "run no node: score the SFD_VERDICT and SFD_STATE\n"
+             "already in IN (a recorded sfd-node run, or a previous\n"
+             "-o) against its TRUTH",
+             [&score_only] { score_only = true; });
+    cli.flag("salvage",
+             "skip bad events instead (resynchronizing on the next\n"
+             "sync word that starts a good event); the summary\n"
+             "counts them (\"log\": bad_events, bytes_skipped); a\n"
+             "file with no good event is still exit 2",
+             [&salvage] { salvage = true; });
+    sfdapp::ConfigCommandLine config;
+    config.add_to(&cli);
+    cli.epilog(
+        "Outputs: an output (-o, --summary, S.timing.json) that is an input (IN, --config) or\n"
+        "  another output (a character device such as /dev/null aside), by path or by file\n"
+        "  (hard or symbolic link), is exit 2 before anything is written. Outputs are written\n"
+        "  to a temporary file in their directory and renamed into place when the run succeeds\n"
+        "  (special files such as /dev/null are written directly); a failed write is exit 1\n"
+        "  naming the path, and a failed run leaves no output behind.\n"
+        "Configuration: --config files (several: later keys win), then the flags over them,\n"
+        "  validated as a whole as by sfd-node: the first bad key is exit 2 naming its file or\n"
+        "  flag, the key and the value.\n"
+        "Exit: 0 ok, 2 bad usage or bad input (a one-line reason naming the file), 1 internal\n"
+        "  failure or a failed write.");
+    std::vector<std::string> positional;
+    if (const int rc = cli.parse(argc, argv, &positional); rc >= 0) return rc;
+    if (positional.size() > 1) return cli.fail("unexpected argument " + positional[1]);
+    if (!positional.empty()) {
+        in_arg = positional[0];
+        in_path = in_arg.c_str();
     }
+    if (const int rc = config.load("sfd-replay", &app_cfg); rc != 0) return rc;
+    std::vector<std::pair<const char *, std::string>> inputs;
+    for (const std::string &f : config.files()) inputs.emplace_back("--config", f);
     sfd_node_config_t &cfg = app_cfg.node;
-    // Flags that set a number of the configuration: the YAML key (its origin in the messages).
-    struct IntFlag {
-        const char *flag;
-        const char *key;
-        int *dst;
-    } const int_flags[] = {{"--window", "window_frames", &cfg.params.window_frames},
-                           {"--group", "group_size", &cfg.params.group_size}};
-    struct RealFlag {
-        const char *flag;
-        const char *key;
-        double *dst;
-    } const real_flags[] = {{"--alpha", "false_alarm_rate", &cfg.params.false_alarm_rate},
-                            {"--pixel-sigma", "pixel_sigma_px", &cfg.params.pixel_sigma_px},
-                            {"--depth-default", "default_depth_m", &cfg.params.default_depth_m}};
-    for (int i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        const bool has = i + 1 < argc;
-        const IntFlag *int_flag = nullptr;
-        const RealFlag *real_flag = nullptr;
-        for (const IntFlag &f : int_flags) {
-            if (!std::strcmp(a, f.flag)) int_flag = &f;
-        }
-        for (const RealFlag &f : real_flags) {
-            if (!std::strcmp(a, f.flag)) real_flag = &f;
-        }
-        if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
-            usage(stdout);
-            return 0;
-        } else if (!std::strcmp(a, "--config") && has) {
-            inputs.emplace_back("--config", argv[++i]);
-        } else if (!std::strcmp(a, "-o") && has) {
-            out_path = argv[++i];
-        } else if (!std::strcmp(a, "--summary") && has) {
-            summary_path = argv[++i];
-        } else if (!std::strcmp(a, "--method") && has) {
-            if (!sfdapp::set_method(argv[++i], &app_cfg, &err)) {
-                std::fprintf(stderr, "sfd-replay: --method %s: %s\n", argv[i], err.c_str());
-                return 2;
-            }
-            app_cfg.origin["method"] = a;
-        } else if (int_flag != nullptr && has) {
-            if (!sfdapp::parse_int_option(a, argv[++i], int_flag->dst, &err)) {
-                std::fprintf(stderr, "sfd-replay: %s\n", err.c_str());
-                return 2;
-            }
-            app_cfg.origin[int_flag->key] = a;
-        } else if (real_flag != nullptr && has) {
-            if (!sfdapp::parse_double_option(a, argv[++i], real_flag->dst, &err)) {
-                std::fprintf(stderr, "sfd-replay: %s\n", err.c_str());
-                return 2;
-            }
-            app_cfg.origin[real_flag->key] = a;
-        } else if (!std::strcmp(a, "--score-only")) {
-            score_only = true;
-        } else if (!std::strcmp(a, "--salvage")) {
-            salvage = true;
-        } else if (!std::strcmp(a, "--no-isolation")) {
-            cfg.params.parity_isolation = 0;
-            app_cfg.origin["parity_isolation"] = a;
-        } else if (a[0] != '-' && in_path == nullptr) {
-            in_path = a;
-        } else {
-            std::fprintf(stderr, "sfd-replay: unknown or incomplete option: %s\n", a);
-            usage(stderr);
-            return 2;
-        }
-    }
-    if (!sfdapp::validate(app_cfg, &err)) {
-        std::fprintf(stderr, "sfd-replay: %s\n", err.c_str());
-        return 2;
-    }
     const std::string method_name = app_cfg.method;
     g_app.verdict_channel = app_cfg.channels.verdict;
     g_app.timing_channel = app_cfg.channels.timing;
     g_app.state_channel = app_cfg.channels.state;
-    if (in_path == nullptr) {
-        std::fprintf(stderr, "sfd-replay: missing IN.lcmlog\n");
-        usage(stderr);
-        return 2;
-    }
+    if (in_path == nullptr) return cli.fail("missing IN.lcmlog (sfd-replay --help)");
     if (score_only && out_path != nullptr) {
         std::fprintf(stderr, "sfd-replay: --score-only writes no OUT (-o)\n");
         return 2;
@@ -427,14 +358,14 @@ int run(int argc_in, char **argv_in) {
         if (g_app.out != nullptr) lcm_eventlog_destroy(g_app.out);
         return 1;
     }
-    const bool progress = isatty(STDERR_FILENO) != 0;
+    // Frames done, rate and time left on a terminal (stderr, CI unset); nothing otherwise.
+    sfdcli::Progress progress("sfd-replay", score_only ? "events" : "frames");
     std::map<int64_t, TruthRecord> truth;  // TRUTH by frame time
     static sfd_truth_t tr;
     static sfd_truth_v1_t tr_v1;  // scratch for logs written before TRUTH had kind[]
     long truth_bad = 0;
     std::vector<double> frame_us;
     int64_t first_ts = 0, last_ts = 0, events = 0, foreign = 0;
-    int last_pct = -1;
     const auto wall0 = std::chrono::steady_clock::now();
     sfd_log_event_t event;
     sfd_log_status_t read_status;
@@ -477,15 +408,12 @@ int run(int argc_in, char **argv_in) {
         } else {
             ++foreign;  // other channels (e.g. a previous run's outputs) are copied, not read
         }
-        if (progress && in.size > 0) {
-            const int pct = int(100.0 * double(in.offset) / double(in.size));
-            if (pct != last_pct) {
-                std::fprintf(stderr, "\rsfd-replay: %3d%%", pct);
-                last_pct = pct;
-            }
+        if (progress.enabled()) {
+            progress.update(score_only ? events : static_cast<long long>(frame_us.size()),
+                            in.size > 0 ? double(in.offset) / double(in.size) : -1.0);
         }
     }
-    if (progress) std::fprintf(stderr, read_status == SFD_LOG_END ? "\rsfd-replay: 100%%\n" : "\n");
+    progress.finish(score_only ? events : static_cast<long long>(frame_us.size()));
     if (read_status != SFD_LOG_END) {  // a bad event (strict), or no good event at all: no output
         std::fprintf(stderr, "sfd-replay: %s\n", in.message);
         if (g_app.out != nullptr) lcm_eventlog_destroy(g_app.out);

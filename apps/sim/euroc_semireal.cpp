@@ -143,20 +143,7 @@ void semireal_help(FILE *out) {
         "  (no images): the real imu0 samples and the ground-truth motion over their overlap,\n"
         "  landmarks on the walls/floor/ceiling of a room around the flight projected through\n"
         "  cam0 (T_BS, intrinsics, distortion of mav0/cam0/sensor.yaml), spurious features\n"
-        "  (moving group, mistracks, mismatches) labelled in TRUTH. See apps/sim/SEMIREAL.md.\n"
-        "  --euroc DIR            folder with mav0/ (imu0, state_groundtruth_estimate0, cam0)\n"
-        "  --features N           tracks kept in view (200)\n"
-        "  --camera-hz F          camera rate (20 Hz)\n"
-        "  --spurious-fraction R  target fraction of spurious features, a third per kind (0.1)\n"
-        "  --pixel-sigma S        pixel noise per axis (0.5 px)\n"
-        "  --depth-var V          depth prior variance (0.01 m^2)\n"
-        "  --jump-px P            mistrack jump (8 px)\n"
-        "  --track-loss P         probability per frame that a track ends (0.02)\n"
-        "  --mover-speed V        speed of the moving group (0.5 m/s)\n"
-        "  --truth-window W       frames a step is labelled spurious, L - 1 (2)\n"
-        "  --config-out F         also write an sfd-replay configuration for the log:\n"
-        "                         filter.init_from_truth 1, the ground truth's gyro and\n"
-        "                         accelerometer biases at the start, pixel_sigma_px S\n");
+        "  (moving group, mistracks, mismatches) labelled in TRUTH. See apps/sim/SEMIREAL.md.\n");
 }
 
 int write_semireal_log(const SemirealOptions &opt) {

@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <list>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,8 @@
 #include "paper_uav.hpp"
 #include "thesis_loop.hpp"
 #include "sfd/sfd.h"
+#include "sfd_cli.hpp"
+#include "sfd_opencv_quiet.hpp"
 
 namespace {
 
@@ -75,116 +78,6 @@ struct Options {
     bool accel_bias_given = false;
     double accel_bias[3] = {0.0, 0.0, 0.0};
 };
-
-void usage(FILE *out) {
-    std::fprintf(
-        out,
-        "usage: sfd-sim SCENARIO [options]          (a summary, no log)\n"
-        "       sfd-sim SCENARIO -o OUT.lcmlog [...] (a sensor log for sfd-replay/node)\n"
-        "Log scenarios (-o): IMU 200 Hz, CAMERA_INFO, FEATURES 20 Hz, TRUTH (with the kind of\n"
-        "each spurious feature). Every flight starts at rest (--rest-s), then ramps smoothly\n"
-        "into its trajectory; IMU with white noise and random-walk biases (below). Faults as a\n"
-        "tracker makes them (apps/sim/SIMULATION.md):\n"
-        "  paper-uav      helicopter at 58 m over flat ground, the paper's fault k(-1,1)\n"
-        "                 (normalized) added to a track from a step on (--fault-magnitude)\n"
-        "  mistracking    20 m altitude over ground with relief; static tracker faults,\n"
-        "                 each a third of the spurious observations: jump onto another\n"
-        "                 static point 5-30 px away (own depth, followed for good), drift\n"
-        "                 0.3-2 px/frame for 3-10 frames then locked onto the point under\n"
-        "                 it, one-frame mismatch with a point 15-60 px away;\n"
-        "                 --outlier-ratio of the observations\n"
-        "  moving-object  as mistracking, plus 2-4 rigid moving groups (walkers 1-2 m/s,\n"
-        "                 vehicles 5-15 m/s) crossing the view: half of --outlier-ratio moving,\n"
-        "                 half static tracker faults\n"
-        "  euroc-semireal EuRoC IMU + ground truth (--euroc DIR), simulated landmarks (below)\n"
-        "  worst-case     the node at full capacity (sfd-hil): the mistracking flight with\n"
-        "                 --features N (default and max %d = SFD_MAX_FEATURES of this build,\n"
-        "                 the node's capacity) per frame, of which round(F * N), drawn anew\n"
-        "                 every frame, are replaced by pixels uniform over the image (same\n"
-        "                 track ids; TRUTH: spurious), F = --random-fraction (1.0). At F = 1\n"
-        "                 every match is an outlier: OPRF/RANSAC use their whole hypothesis\n"
-        "                 budget every frame once the filter runs, every parity group fails\n"
-        "                 and goes into isolation. No tracker faults (--outlier-ratio ignored).\n"
-        "Summary scenarios:\n"
-        "  paper-uav   Tornqvist et al. 2008 Section IV: helicopter at 58 m, downward\n"
-        "              camera, features over 40x40 m; parity test Monte Carlo: P_fa and\n"
-        "              P_d against the non-central chi-square, Figure 1 and ROC CSVs\n"
-        "  isolation   sfd isolation vs the paper's discard-the-group rule at equal\n"
-        "              detection probability, simulated flight with mistracks\n"
-        "  uav-imu     gyro integration and IMU-predicted pixel motion over the paper's\n"
-        "              flight (camera model + gyro integration check)\n"
-        "  thesis-loop Kilic 2014 Chapter IV: OPRF, 1-point RANSAC, F-matrix RANSAC and no\n"
-        "              association in an EKF localization loop (ground-truth loop, map,\n"
-        "              200 Hz IMU, 20 Hz camera); sweeps of measurement noise, IMU (control\n"
-        "              input) noise and mismatch ratio; association time and position RMSE\n"
-        "              per method (Figures 4-9): thesis_rmse.csv, thesis_time.csv\n"
-        "Options:\n"
-        "  --seed N            PRNG seed (default 1)\n"
-        "  --windows N         paper-uav: Monte Carlo windows per case (10000)\n"
-        "  --window-frames L   paper-uav: window length (2, the paper's)\n"
-        "  --group-size n      paper-uav: group size (3)\n"
-        "  --frames N          isolation / uav-imu: frames at 20 Hz (200); thesis-loop:\n"
-        "                      frames per run (800 = one 40 s loop; --quick 200)\n"
-        "  --runs N            thesis-loop: Monte Carlo runs per sweep point (5; --quick 2)\n"
-        "  --quick             thesis-loop: two levels per sweep (5/20, 0/10, 0/30 %%)\n"
-        "  --features N        isolation / uav-imu: features (240 / 200, max %d)\n"
-        "  --outlier-ratio R   isolation: fraction of spurious features (0.1)\n"
-        "  --jump-px P         isolation: mistrack jump (8 px; flight logs draw 5-30 px)\n"
-        "  --alpha A           uav-imu: false-alarm rate of the printed thresholds\n"
-        "  --csv-dir DIR       write the scenario's CSV files into DIR (created if missing)\n"
-        "  -o OUT.lcmlog       write a sensor log (log scenarios above)\n"
-        "Flight log options (paper-uav, mistracking, moving-object, worst-case with -o):\n"
-        "  --frames N          20 Hz frames in all, the rest included (400)\n"
-        "  --features N        static tracks per frame (200; worst-case %d)\n"
-        "  --outlier-ratio R   target fraction of spurious observations (0.1); paper-uav: a\n"
-        "                      fraction R / (W - 1) of the tracks get the fault each frame\n"
-        "  --fault-magnitude K paper-uav: k of k(-1,1) in normalized units (0.02)\n"
-        "  --depth-var V       depth prior variance written with the features (0 m^2)\n"
-        "  --pixel-noise S     pixel noise (1 px)\n"
-        "  --truth-window W    frames a step (jump, drift step, mismatch and its return)\n"
-        "                      labels the track spurious, from the step: the windows that mix\n"
-        "                      both sides of it, L - 1 (2); moving points: every frame\n"
-        "  --rest-s T          seconds at rest at the start (2.0; 0: start in motion, no ramp)\n"
-        "  --ramp-s T          seconds of the C2 ramp from rest into the trajectory (3.0)\n"
-        "  --gyro-noise D      gyro white noise density (3.4e-4 rad/s/sqrt(Hz))\n"
-        "  --accel-noise D     accelerometer white noise density (4.0e-3 m/s^2/sqrt(Hz))\n"
-        "  --gyro-bias-rw D    gyro bias random walk (3.9e-5 rad/s^2/sqrt(Hz))\n"
-        "  --accel-bias-rw D   accelerometer bias random walk (6.0e-3 m/s^3/sqrt(Hz))\n"
-        "                      (the densities of apps/config/sfd.yaml; per 5 ms sample:\n"
-        "                      sigma = D / sqrt(dt), bias += D_rw * sqrt(dt) * N(0, 1))\n"
-        "  --gyro-bias X,Y,Z   initial gyro bias (rad/s; default drawn, N(0, 0.002^2))\n"
-        "  --accel-bias X,Y,Z  initial accelerometer bias (m/s^2; default drawn, N(0, 0.02^2))\n"
-        "  --random-fraction F worst-case: fraction of features replaced by random\n"
-        "                      pixels every frame, 0..1 (1.0)\n"
-        "Exit: 0 ok, 2 bad usage, 1 internal failure.\n",
-        SFD_MAX_FEATURES, SFD_MAX_FEATURES, SFD_MAX_FEATURES);
-    sfdsim::thesis_loop_help(out);
-    sfdsim::semireal_help(out);
-}
-
-bool parse_int(const char *s, long lo, long hi, long *out) {
-    char *end = nullptr;
-    const long v = std::strtol(s, &end, 10);
-    if (end == s || *end != '\0' || v < lo || v > hi) return false;
-    *out = v;
-    return true;
-}
-
-// "X,Y,Z": three finite numbers of magnitude <= lim.
-bool parse_vec3(const char *s, double lim, double out[3]) {
-    double v[3];
-    const char *p = s;
-    for (int k = 0; k < 3; ++k) {
-        char *end = nullptr;
-        v[k] = std::strtod(p, &end);
-        if (end == p || !(std::fabs(v[k]) <= lim)) return false;
-        if (k < 2 && *end != ',') return false;
-        if (k == 2 && *end != '\0') return false;
-        p = end + 1;
-    }
-    for (int k = 0; k < 3; ++k) out[k] = v[k];
-    return true;
-}
 
 // Attitude of the camera (world <- camera) at time t: downward-looking (camera z = world -z),
 // with the roll/pitch oscillation and yaw rate of the assumptions above.
@@ -366,164 +259,292 @@ bool make_dirs(const char *path) {
     return ::stat(path, &st) == 0 && S_ISDIR(st.st_mode) ? true : (errno = ENOTDIR, false);
 }
 
+// The scenarios, what each does, and which options apply to it (the help of
+// `sfd-sim SCENARIO --help` lists those; every option is accepted with every scenario).
+struct Scenario {
+    const char *name;
+    const char *help;
+};
+const Scenario kScenarios[] = {
+    {"paper-uav",
+     "  Summary (no -o): Tornqvist et al. 2008 Section IV: helicopter at 58 m, downward\n"
+     "  camera, features over 40x40 m; parity test Monte Carlo: P_fa and P_d against the\n"
+     "  non-central chi-square, Figure 1 and ROC CSVs (--csv-dir).\n"
+     "  Log (-o): the same flight over flat ground, the paper's fault k(-1,1) (normalized)\n"
+     "  added to a track from a step on (--fault-magnitude)."},
+    {"mistracking",
+     "  Log (-o): 20 m altitude over ground with relief; static tracker faults, each a third\n"
+     "  of the spurious observations: jump onto another static point 5-30 px away (own\n"
+     "  depth, followed for good), drift 0.3-2 px/frame for 3-10 frames then locked onto the\n"
+     "  point under it, one-frame mismatch with a point 15-60 px away; --outlier-ratio of\n"
+     "  the observations."},
+    {"moving-object",
+     "  Log (-o): as mistracking, plus 2-4 rigid moving groups (walkers 1-2 m/s, vehicles\n"
+     "  5-15 m/s) crossing the view: half of --outlier-ratio moving, half static tracker\n"
+     "  faults."},
+    {"worst-case",
+     "  Log (-o): the node at full capacity (sfd-hil): the mistracking flight with --features\n"
+     "  N (default and max SFD_MAX_FEATURES of this build) per frame, of which round(F * N),\n"
+     "  drawn anew every frame, are replaced by pixels uniform over the image (same track\n"
+     "  ids; TRUTH: spurious), F = --random-fraction (1.0). At F = 1 every match is an\n"
+     "  outlier. No tracker faults (--outlier-ratio ignored)."},
+    {"euroc-semireal", ""},  // semireal_help()
+    {"isolation",
+     "  Summary: sfd isolation vs the paper's discard-the-group rule at equal detection\n"
+     "  probability, simulated flight with mistracks."},
+    {"uav-imu",
+     "  Summary: gyro integration and IMU-predicted pixel motion over the paper's flight\n"
+     "  (camera model + gyro integration check)."},
+    {"thesis-loop",
+     "  Summary: Kilic 2014 Chapter IV: OPRF, 1-point RANSAC, F-matrix RANSAC and no\n"
+     "  association in an EKF localization loop (ground-truth loop, map, 200 Hz IMU, 20 Hz\n"
+     "  camera); sweeps of measurement noise, IMU (control input) noise and mismatch ratio;\n"
+     "  association time and position RMSE per method (Figures 4-9): thesis_rmse.csv,\n"
+     "  thesis_time.csv (--csv-dir)."},
+};
+
+const Scenario *find_scenario(const std::string &name) {
+    for (const Scenario &s : kScenarios) {
+        if (name == s.name) return &s;
+    }
+    return nullptr;
+}
+
+// The scenarios an option applies to (space-separated; "log" = the flight-log scenarios with -o).
+bool applies(const char *scope, const std::string &scenario) {
+    if (scenario.empty()) return true;
+    const std::string sc = std::string(" ") + scope + " ";
+    const bool log = sfdsim::is_flight_scenario(scenario);
+    return sc.find(" " + scenario + " ") != std::string::npos ||
+           (log && sc.find(" log ") != std::string::npos) || sc.find(" all ") != std::string::npos;
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
+    sfdapp::quiet_opencv();  // euroc-semireal reads sensor.yaml through cv::FileStorage
     Options opt;
-    // Options taking one number in a range: flag, bounds, destination.
-    struct RangeFlag {
-        const char *flag;
-        double lo, hi;
-        double *dst;
+    // `sfd-sim SCENARIO ...`: the scenario is a subcommand with its own help; its name is the
+    // first word that is not an option (an option's value aside).
+    std::string scenario_word;
+    if (argc > 1 && argv[1][0] != '-') scenario_word = argv[1];
+    const Scenario *scenario = find_scenario(scenario_word);
+    const std::string shown = scenario != nullptr ? scenario_word : "";
+    sfdcli::Parser cli(
+        "sfd-sim", shown.empty() ? "sfd-sim" : "sfd-sim " + shown,
+        shown.empty() ? "SCENARIO [options]          (a summary, no log)\n"
+                        "       sfd-sim SCENARIO -o OUT.lcmlog [...] (a sensor log for "
+                        "sfd-replay/node)\n"
+                        "       sfd-sim SCENARIO --help              (the scenario's options)"
+                      : "[options]",
+        scenario == nullptr
+            ? "Log scenarios (-o): IMU 200 Hz, CAMERA_INFO, FEATURES 20 Hz, TRUTH (with the kind\n"
+              "of each spurious feature). Every flight starts at rest (--rest-s), then ramps\n"
+              "smoothly into its trajectory; IMU with white noise and random-walk biases. Faults\n"
+              "as a tracker makes them (apps/sim/SIMULATION.md). Scenarios:\n"
+              "  log (-o):  paper-uav, mistracking, moving-object, worst-case, euroc-semireal\n"
+              "  summary:   paper-uav, isolation, uav-imu, thesis-loop"
+            : scenario->help);
+    // add(name, metavar, scope, help, setter)
+    const auto add = [&cli, &shown](const char *name, const char *metavar, const char *scope,
+                                    const std::string &help, sfdcli::Setter set) {
+        sfdcli::Option o;
+        o.name = name;
+        o.metavar = metavar;
+        o.help = help;
+        o.set = std::move(set);
+        o.hidden = !applies(scope, shown);
+        if (!std::strcmp(name, "output")) o.short_name = 'o';
+        cli.add(o);
     };
-    const RangeFlag range_flags[] = {{"--camera-hz", 0.1, 200.0, &opt.camera_hz},
-                                     {"--spurious-fraction", 0.0, 0.9, &opt.spurious_fraction},
-                                     {"--pixel-sigma", 0.0, 100.0, &opt.pixel_sigma},
-                                     {"--track-loss", 0.0, 1.0, &opt.track_loss},
-                                     {"--mover-speed", 0.0, 100.0, &opt.mover_speed},
-                                     {"--random-fraction", 0.0, 1.0, &opt.random_fraction},
-                                     {"--rest-s", 0.0, 3600.0, &opt.rest_s},
-                                     {"--ramp-s", 0.1, 600.0, &opt.ramp_s},
-                                     {"--gyro-noise", 0.0, 1.0, &opt.gyro_noise},
-                                     {"--accel-noise", 0.0, 10.0, &opt.accel_noise},
-                                     {"--gyro-bias-rw", 0.0, 1.0, &opt.gyro_bias_rw},
-                                     {"--accel-bias-rw", 0.0, 10.0, &opt.accel_bias_rw}};
-    auto find_range_flag = [&range_flags](const char *flag) -> const RangeFlag * {
-        for (const RangeFlag &r : range_flags) {
-            if (!std::strcmp(flag, r.flag)) return &r;
+    const auto int_opt = [](int *dst, long long lo, long long hi) -> sfdcli::Setter {
+        return [dst, lo, hi](const std::string &v, std::string *why) {
+            long long x = 0;
+            if (!sfdcli::parse_int(v, lo, hi, &x, why)) return false;
+            *dst = static_cast<int>(x);
+            return true;
+        };
+    };
+    const auto real_opt = [](double *dst, double lo, double hi) -> sfdcli::Setter {
+        return [dst, lo, hi](const std::string &v, std::string *why) {
+            return sfdcli::parse_real(v, lo, hi, dst, why);
+        };
+    };
+    std::list<std::string> texts;  // the values the const char * options point to
+    const auto text_opt = [&texts](const char **dst) -> sfdcli::Setter {
+        return [&texts, dst](const std::string &v, std::string *) {
+            texts.push_back(v);
+            *dst = texts.back().c_str();
+            return true;
+        };
+    };
+    const std::string max_f = std::to_string(SFD_MAX_FEATURES);
+    cli.section("Options");
+    add("output", "OUT.lcmlog", "log euroc-semireal", "write a sensor log (log scenarios)",
+        text_opt(&opt.out_log));
+    add("seed", "N", "all", "PRNG seed (1)", [&opt](const std::string &v, std::string *why) {
+        errno = 0;
+        opt.seed = std::strtoull(v.c_str(), nullptr, 10);
+        if (v.empty() || v.find_first_not_of("0123456789") != std::string::npos || errno != 0) {
+            *why = "is not an unsigned 64-bit integer";
+            return false;
         }
-        return nullptr;
-    };
-    for (int i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        long v = 0;
-        if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) {
-            usage(stdout);
-            return 0;
-        } else if (!std::strcmp(a, "--seed") && i + 1 < argc) {
-            char *end = nullptr;
-            opt.seed = std::strtoull(argv[++i], &end, 10);
-            if (*end != '\0') {
-                std::fprintf(stderr, "sfd-sim: --seed: not an unsigned integer: %s\n", argv[i]);
-                return 2;
+        return true;
+    });
+    add("frames", "N", "log isolation uav-imu thesis-loop",
+        "frames at 20 Hz: flight logs 400 (the rest included); isolation /\n"
+        "uav-imu 200; thesis-loop: per run (800 = one 40 s loop; --quick 200)",
+        int_opt(&opt.frames, 1, 100000));
+    add("features", "N", "log euroc-semireal isolation uav-imu",
+        "features (tracks) per frame: flight logs 200 (worst-case " + max_f +
+            "),\neuroc-semireal 200, isolation 240, uav-imu 200; max " + max_f,
+        int_opt(&opt.features, 1, SFD_MAX_FEATURES));
+    add("windows", "N", "paper-uav", "paper-uav summary: Monte Carlo windows per case (10000)",
+        int_opt(&opt.windows, 10, 10000000));
+    add("window-frames", "L", "paper-uav", "paper-uav summary: window length (2, the paper's)",
+        int_opt(&opt.window_frames, 2, SFD_MAX_WINDOW));
+    add("group-size", "n", "paper-uav", "paper-uav summary: group size (3)",
+        int_opt(&opt.group_size, 1, SFD_MAX_GROUP));
+    add("false-alarm-rate", "A", "uav-imu",
+        "uav-imu: false-alarm rate of the printed thresholds (0.01)",
+        [&opt](const std::string &v, std::string *why) {
+            if (!sfdcli::parse_real(v, 0.0, 1.0, &opt.alpha, why) || opt.alpha <= 0.0 ||
+                opt.alpha >= 1.0) {
+                *why = "is not in (0, 1)";
+                return false;
             }
-        } else if (!std::strcmp(a, "--frames") && i + 1 < argc) {
-            if (!parse_int(argv[++i], 1, 100000, &v)) {
-                std::fprintf(stderr, "sfd-sim: --frames: expected 1..100000, got %s\n", argv[i]);
-                return 2;
-            }
-            opt.frames = static_cast<int>(v);
-        } else if (!std::strcmp(a, "--features") && i + 1 < argc) {
-            if (!parse_int(argv[++i], 1, SFD_MAX_FEATURES, &v)) {
-                std::fprintf(stderr, "sfd-sim: --features: expected 1..%d, got %s\n",
-                             SFD_MAX_FEATURES, argv[i]);
-                return 2;
-            }
-            opt.features = static_cast<int>(v);
-        } else if (!std::strcmp(a, "--alpha") && i + 1 < argc) {
-            char *end = nullptr;
-            opt.alpha = std::strtod(argv[++i], &end);
-            if (*end != '\0' || !(opt.alpha > 0.0 && opt.alpha < 1.0)) {
-                std::fprintf(stderr, "sfd-sim: --alpha: expected (0, 1), got %s\n", argv[i]);
-                return 2;
-            }
-        } else if (!std::strcmp(a, "--windows") && i + 1 < argc) {
-            if (!parse_int(argv[++i], 10, 10000000, &v)) {
-                std::fprintf(stderr, "sfd-sim: --windows: expected 10..10000000, got %s\n",
-                             argv[i]);
-                return 2;
-            }
-            opt.windows = static_cast<int>(v);
-        } else if (!std::strcmp(a, "--window-frames") && i + 1 < argc) {
-            if (!parse_int(argv[++i], 2, SFD_MAX_WINDOW, &v)) {
-                std::fprintf(stderr, "sfd-sim: --window-frames: expected 2..%d, got %s\n",
-                             SFD_MAX_WINDOW, argv[i]);
-                return 2;
-            }
-            opt.window_frames = static_cast<int>(v);
-        } else if (!std::strcmp(a, "--group-size") && i + 1 < argc) {
-            if (!parse_int(argv[++i], 1, SFD_MAX_GROUP, &v)) {
-                std::fprintf(stderr, "sfd-sim: --group-size: expected 1..%d, got %s\n",
-                             SFD_MAX_GROUP, argv[i]);
-                return 2;
-            }
-            opt.group_size = static_cast<int>(v);
-        } else if ((!std::strcmp(a, "--outlier-ratio") || !std::strcmp(a, "--jump-px")) &&
-                   i + 1 < argc) {
-            char *end = nullptr;
-            const double x = std::strtod(argv[++i], &end);
-            const bool ratio = !std::strcmp(a, "--outlier-ratio");
-            if (*end != '\0' || !(x >= 0.0) || (ratio && x > 1.0) || (!ratio && x > 1000.0)) {
-                std::fprintf(stderr, "sfd-sim: %s: out of range: %s\n", a, argv[i]);
-                return 2;
-            }
-            (ratio ? opt.outlier_ratio : opt.jump_px) = x;
-        } else if (!std::strcmp(a, "-o") && i + 1 < argc) {
-            opt.out_log = argv[++i];
-        } else if ((!std::strcmp(a, "--fault-magnitude") || !std::strcmp(a, "--depth-var") ||
-                    !std::strcmp(a, "--pixel-noise")) &&
-                   i + 1 < argc) {
-            char *end = nullptr;
-            const double x = std::strtod(argv[++i], &end);
-            if (*end != '\0' || !(x >= 0.0) || x > 1e4) {
-                std::fprintf(stderr, "sfd-sim: %s: out of range: %s\n", a, argv[i]);
-                return 2;
-            }
-            if (!std::strcmp(a, "--fault-magnitude")) opt.fault_magnitude = x;
-            if (!std::strcmp(a, "--depth-var")) opt.depth_var = opt.semireal_depth_var = x;
-            if (!std::strcmp(a, "--pixel-noise")) opt.pixel_noise = x;
-        } else if (!std::strcmp(a, "--truth-window") && i + 1 < argc) {
-            if (!parse_int(argv[++i], 1, 100, &v)) {
-                std::fprintf(stderr, "sfd-sim: --truth-window: expected 1..100, got %s\n", argv[i]);
-                return 2;
-            }
-            opt.truth_window = static_cast<int>(v);
-        } else if (!std::strcmp(a, "--runs") && i + 1 < argc) {
-            if (!parse_int(argv[++i], 1, 10000, &v)) {
-                std::fprintf(stderr, "sfd-sim: --runs: expected 1..10000, got %s\n", argv[i]);
-                return 2;
-            }
-            opt.runs = static_cast<int>(v);
-        } else if (!std::strcmp(a, "--quick")) {
+            return true;
+        });
+    add("runs", "N", "thesis-loop", "thesis-loop: Monte Carlo runs per sweep point (5; --quick 2)",
+        int_opt(&opt.runs, 1, 10000));
+    {
+        sfdcli::Option q;
+        q.name = "quick";
+        q.help = "thesis-loop: two levels per sweep (5/20, 0/10, 0/30 %)";
+        q.set = [&opt](const std::string &, std::string *) {
             opt.quick = true;
-        } else if (!std::strcmp(a, "--euroc") && i + 1 < argc) {
-            opt.euroc_dir = argv[++i];
-        } else if (!std::strcmp(a, "--config-out") && i + 1 < argc) {
-            opt.config_out = argv[++i];
-        } else if (const RangeFlag *rf = find_range_flag(a); rf != nullptr && i + 1 < argc) {
-            char *end = nullptr;
-            const double x = std::strtod(argv[++i], &end);
-            if (*end != '\0' || !(x >= rf->lo && x <= rf->hi)) {
-                std::fprintf(stderr, "sfd-sim: %s: expected %g..%g, got %s\n", a, rf->lo, rf->hi,
-                             argv[i]);
-                return 2;
-            }
-            *rf->dst = x;
-        } else if ((!std::strcmp(a, "--gyro-bias") || !std::strcmp(a, "--accel-bias")) &&
-                   i + 1 < argc) {
-            const bool gyro = !std::strcmp(a, "--gyro-bias");
+            return true;
+        };
+        q.hidden = !applies("thesis-loop", shown);
+        cli.add(q);
+    }
+    add("outlier-ratio", "R", "log isolation",
+        "target fraction of spurious observations (0.1); paper-uav log: a\n"
+        "fraction R / (W - 1) of the tracks get the fault each frame",
+        real_opt(&opt.outlier_ratio, 0.0, 1.0));
+    add("jump-px", "P", "isolation euroc-semireal",
+        "mistrack jump (8 px; flight logs draw 5-30 px)", real_opt(&opt.jump_px, 0.0, 1000.0));
+    add("csv-dir", "DIR", "paper-uav isolation thesis-loop",
+        "write the scenario's CSV files into DIR (created if missing)", text_opt(&opt.csv_dir));
+    add("fault-magnitude", "K", "paper-uav",
+        "paper-uav log: k of k(-1,1) in normalized units (0.02)",
+        real_opt(&opt.fault_magnitude, 0.0, 1e4));
+    add("depth-var-m2", "V", "log euroc-semireal",
+        "depth prior variance written with the features (m^2; flight\nlogs 0, euroc-semireal 0.01)",
+        [&opt](const std::string &v, std::string *why) {
+            if (!sfdcli::parse_real(v, 0.0, 1e4, &opt.depth_var, why)) return false;
+            opt.semireal_depth_var = opt.depth_var;
+            return true;
+        });
+    add("pixel-sigma-px", "S", "log euroc-semireal",
+        "pixel noise per axis (px; flight logs 1, euroc-semireal 0.5)",
+        [&opt](const std::string &v, std::string *why) {
+            if (!sfdcli::parse_real(v, 0.0, 100.0, &opt.pixel_noise, why)) return false;
+            opt.pixel_sigma = opt.pixel_noise;
+            return true;
+        });
+    add("truth-window", "W", "log euroc-semireal",
+        "frames a step (jump, drift step, mismatch and its return) labels\n"
+        "the track spurious, from the step: the windows that mix both sides\n"
+        "of it, L - 1 (2); moving points: every frame",
+        int_opt(&opt.truth_window, 1, 100));
+    add("rest-s", "T", "log", "seconds at rest at the start (2.0; 0: start in motion, no ramp)",
+        real_opt(&opt.rest_s, 0.0, 3600.0));
+    add("ramp-s", "T", "log", "seconds of the C2 ramp from rest into the trajectory (3.0)",
+        real_opt(&opt.ramp_s, 0.1, 600.0));
+    add("gyro-noise-rad-s-rthz", "D", "log",
+        "gyro white noise density (3.4e-4 rad/s/sqrt(Hz)); the IMU model's\n"
+        "four densities are those of the filter.* keys of apps/config/sfd.yaml\n"
+        "(per 5 ms sample: sigma = D / sqrt(dt), bias += D_rw sqrt(dt) N(0, 1))",
+        real_opt(&opt.gyro_noise, 0.0, 1.0));
+    add("accel-noise-m-s2-rthz", "D", "log",
+        "accelerometer white noise density (4.0e-3 m/s^2/sqrt(Hz))",
+        real_opt(&opt.accel_noise, 0.0, 10.0));
+    add("gyro-bias-rw-rad-s2-rthz", "D", "log", "gyro bias random walk (3.9e-5 rad/s^2/sqrt(Hz))",
+        real_opt(&opt.gyro_bias_rw, 0.0, 1.0));
+    add("accel-bias-rw-m-s3-rthz", "D", "log",
+        "accelerometer bias random walk (6.0e-3 m/s^3/sqrt(Hz))",
+        real_opt(&opt.accel_bias_rw, 0.0, 10.0));
+    const auto bias_opt = [&opt](bool gyro) -> sfdcli::Setter {
+        return [&opt, gyro](const std::string &v, std::string *why) {
             const double lim = gyro ? 1.0 : 10.0;
-            if (!parse_vec3(argv[++i], lim, gyro ? opt.gyro_bias : opt.accel_bias)) {
-                std::fprintf(stderr, "sfd-sim: %s: expected X,Y,Z with |X|,|Y|,|Z| <= %g, got %s\n",
-                             a, lim, argv[i]);
-                return 2;
+            double b[3];
+            if (!sfdcli::parse_vec3(v, b, why)) return false;
+            for (int k = 0; k < 3; ++k) {
+                if (!(std::fabs(b[k]) <= lim)) {
+                    char buf[64];
+                    std::snprintf(buf, sizeof buf, "is not within +-%g per axis", lim);
+                    *why = buf;
+                    return false;
+                }
             }
+            for (int k = 0; k < 3; ++k) (gyro ? opt.gyro_bias : opt.accel_bias)[k] = b[k];
             (gyro ? opt.gyro_bias_given : opt.accel_bias_given) = true;
-        } else if (!std::strcmp(a, "--csv-dir") && i + 1 < argc) {
-            opt.csv_dir = argv[++i];
-        } else if (a[0] != '-' && opt.scenario == nullptr) {
-            opt.scenario = a;
-        } else {
-            std::fprintf(stderr, "sfd-sim: unknown or incomplete option: %s\n", a);
-            usage(stderr);
-            return 2;
-        }
+            return true;
+        };
+    };
+    add("gyro-bias-rad-s", "X,Y,Z", "log",
+        "initial gyro bias (rad/s; default drawn, N(0, 0.002^2))", bias_opt(true));
+    add("accel-bias-m-s2", "X,Y,Z", "log",
+        "initial accelerometer bias (m/s^2; default drawn, N(0, 0.02^2))", bias_opt(false));
+    add("random-fraction", "F", "worst-case",
+        "worst-case: fraction of features replaced by random pixels every\nframe, 0..1 (1.0)",
+        real_opt(&opt.random_fraction, 0.0, 1.0));
+    add("euroc", "DIR", "euroc-semireal",
+        "euroc-semireal: folder with mav0/ (imu0, state_groundtruth_estimate0,\ncam0)",
+        text_opt(&opt.euroc_dir));
+    add("camera-hz", "F", "euroc-semireal", "euroc-semireal: camera rate (20 Hz)",
+        real_opt(&opt.camera_hz, 0.1, 200.0));
+    add("spurious-fraction", "R", "euroc-semireal",
+        "euroc-semireal: target fraction of spurious features, a third per\nkind (0.1)",
+        real_opt(&opt.spurious_fraction, 0.0, 0.9));
+    add("track-loss", "P", "euroc-semireal",
+        "euroc-semireal: probability per frame that a track ends (0.02)",
+        real_opt(&opt.track_loss, 0.0, 1.0));
+    add("mover-speed-m-s", "V", "euroc-semireal",
+        "euroc-semireal: speed of the moving group (0.5 m/s)",
+        real_opt(&opt.mover_speed, 0.0, 100.0));
+    add("config-out", "F", "euroc-semireal",
+        "euroc-semireal: also write an sfd-replay configuration for the log:\n"
+        "filter.init_from_truth 1, the ground truth's gyro and accelerometer\n"
+        "biases at the start, pixel_sigma_px S",
+        text_opt(&opt.config_out));
+    // The spellings of sfd 0.1 (deprecated).
+    cli.alias("alpha", "false-alarm-rate");
+    cli.alias("depth-var", "depth-var-m2");
+    cli.alias("pixel-noise", "pixel-sigma-px");
+    cli.alias("pixel-sigma", "pixel-sigma-px");
+    cli.alias("gyro-noise", "gyro-noise-rad-s-rthz");
+    cli.alias("accel-noise", "accel-noise-m-s2-rthz");
+    cli.alias("gyro-bias-rw", "gyro-bias-rw-rad-s2-rthz");
+    cli.alias("accel-bias-rw", "accel-bias-rw-m-s3-rthz");
+    cli.alias("gyro-bias", "gyro-bias-rad-s");
+    cli.alias("accel-bias", "accel-bias-m-s2");
+    cli.alias("mover-speed", "mover-speed-m-s");
+    if (scenario != nullptr && !std::strcmp(scenario->name, "thesis-loop")) {
+        cli.extra_help(sfdsim::thesis_loop_help);
+    } else if (scenario != nullptr && !std::strcmp(scenario->name, "euroc-semireal")) {
+        cli.extra_help(sfdsim::semireal_help);
     }
-    if (opt.scenario == nullptr) {
-        std::fprintf(stderr, "sfd-sim: missing SCENARIO\n");
-        usage(stderr);
-        return 2;
-    }
+    cli.epilog(scenario == nullptr ? "sfd-sim SCENARIO --help lists the options of SCENARIO.\n"
+                                     "Exit: 0 ok, 2 bad usage, 1 internal failure."
+                                   : "Exit: 0 ok, 2 bad usage, 1 internal failure.");
+    std::vector<std::string> positional;
+    if (const int rc = cli.parse(argc, argv, &positional); rc >= 0) return rc;
+    if (positional.empty()) return cli.fail("missing SCENARIO (sfd-sim --help)");
+    if (positional.size() > 1) return cli.fail("unexpected argument " + positional[1]);
+    texts.push_back(positional[0]);
+    opt.scenario = texts.back().c_str();
     if (opt.csv_dir != nullptr && !make_dirs(opt.csv_dir)) {  // like `mkdir -p`
         std::fprintf(stderr, "sfd-sim: --csv-dir %s: cannot create: %s\n", opt.csv_dir,
                      std::strerror(errno));

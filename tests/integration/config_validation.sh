@@ -172,25 +172,48 @@ check replay 'url.yaml: lcm_url: "" is empty' --config url.yaml &&
   check node 'url.yaml: lcm_url: "" is empty' --config url.yaml && echo "exit 2 from both: url"
 
 # --- bad flags -----------------------------------------------------------------------------------
-both "--method ransac: not one of none, parity, oprf, ransac1, ransacf, both" --method ransac
+both "--method: ransac is not one of none, parity, oprf, ransac1, ransacf, both" --method ransac
 bad method_off 's/enabled: 1/enabled: 0/'
 both '--method: method: "ransacf" needs filter.enabled: 1 (it is 0, from method_off.yaml)' \
   --config method_off.yaml --method ransacf
 both "gravity.yaml: filter.gravity_m_s2: -9.81 is not > 0" --config=gravity.yaml
-# sfd-replay's numbers (parsed whole, ranges as for the file)
-check replay "--window 2.5: not an integer" --window 2.5 && echo "exit 2: --window 2.5"
-check replay "--window: window_frames: 7 is not in 2..5" --window=7 && echo "exit 2: --window 7"
-check replay "--window 99999999999: out of the integer range" --window 99999999999 && echo "exit 2: --window 99999999999"
-check replay "--group x: not an integer" --group x && echo "exit 2: --group x"
-check replay "--alpha: false_alarm_rate: nan is not finite" --alpha nan && echo "exit 2: --alpha nan"
-check replay "--alpha 0.1x: not a number" --alpha 0.1x && echo "exit 2: --alpha 0.1x"
-check replay "--pixel-sigma: pixel_sigma_px: -1 is not > 0" --pixel-sigma -1 && echo "exit 2: --pixel-sigma -1"
-check replay "--depth-default: default_depth_m: 0 is not > 0" --depth-default 0 && echo "exit 2: --depth-default 0"
-# sfd-node's channels and LCM URL
-check node '--imu-channel: channels.imu: "FEATURES" is the same as channels.features' \
-  --lcm-url memq:// --imu-channel FEATURES && echo "exit 2: --imu-channel FEATURES"
-check node '--state-channel: channels.state: "SFD TIMING" contains '"' '"' (a channel name is matched exactly: no blanks, control or regular-expression characters)' \
-  --lcm-url memq:// --state-channel "SFD TIMING" && echo "exit 2: --state-channel 'SFD TIMING'"
+# a flag per key, the same on both tools: its value parsed whole (types as for the file), its
+# range judged with the file's (docs/deploy.md, "Command line")
+both "--window-frames: 2.5 is not an integer" --window-frames 2.5
+both "--window-frames: window_frames: 7 is not in 2..5" --window-frames=7
+both "--window-frames: 99999999999 is outside the 32-bit integer range" --window-frames 99999999999
+both "--group-size: x is not an integer" --group-size x
+both "--false-alarm-rate: false_alarm_rate: nan is not finite" --false-alarm-rate nan
+both "--false-alarm-rate: 0.1x is not a number" --false-alarm-rate 0.1x
+both "--pixel-sigma-px: pixel_sigma_px: -1 is not > 0" --pixel-sigma-px -1
+both "--default-depth-m: default_depth_m: 0 is not > 0" --default-depth-m=0
+both "--filter.window-size: filter.window_size: 6 is not in 2..5" --filter.window-size 6
+both "--max-imu-gap-us: 2.5 is not a whole number of microseconds (|value| <= 9e15)" \
+  --max-imu-gap-us 2.5
+both "--gyro-bias-rad-s: 0,1 is not three finite numbers X,Y,Z" --gyro-bias-rad-s 0,1
+check replay "unknown option --no-such-key (sfd-replay --help lists the options)" \
+  --no-such-key 1 && echo "exit 2: an unknown flag"
+check node "unknown option --no-such-key (sfd-node --help lists the options)" \
+  --lcm-url memq:// --no-such-key 1 && echo "exit 2: an unknown flag"
+check replay "unknown option --filter.window (sfd-replay --help lists the options)" \
+  --filter.window 3 && echo "exit 2: an abbreviation is an unknown option"
+check node "unknown option --filter.window (sfd-node --help lists the options)" \
+  --lcm-url memq:// --filter.window 3 && echo "exit 2: an abbreviation is an unknown option"
+# channels and the LCM URL
+both '--channels.imu: channels.imu: "FEATURES" is the same as channels.features' \
+  --channels.imu FEATURES
+both '--channels.state: channels.state: "SFD TIMING" contains '"' '"' (a channel name is matched exactly: no blanks, control or regular-expression characters)' \
+  --channels.state "SFD TIMING"
+# the spellings of sfd 0.1 still work (deprecated, with a notice): same result as the new ones
+rm -f old.lcmlog new.lcmlog
+timeout -k 5 60 "$replay" "$golden" -o old.lcmlog --alpha 0.05 --window 2 --no-isolation \
+  > /dev/null 2> old.err || fail "the deprecated spellings: $(cat old.err)"
+timeout -k 5 60 "$replay" "$golden" -o new.lcmlog --false-alarm-rate 0.05 --window-frames 2 \
+  --parity-isolation 0 > /dev/null 2> new.err || fail "the new spellings: $(cat new.err)"
+cmp -s old.lcmlog new.lcmlog || fail "deprecated spellings give another OUT than the new ones"
+grep -q "^sfd-replay: --alpha is deprecated: use --false-alarm-rate$" old.err ||
+  fail "no deprecation notice: $(cat old.err)"
+[ ! -s new.err ] || fail "the new spellings print on stderr: $(cat new.err)"
 check node '--lcm-url: lcm_url: "" is empty' --lcm-url "" && echo "exit 2: --lcm-url ''"
 
 # --- a flag that repairs the file: judged after the overrides -----------------------------------

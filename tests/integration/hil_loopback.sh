@@ -13,6 +13,8 @@
 #  4. no node: every frame times out: exit 3, all frames lost;
 #  5. usage and input errors: exit 2 (no source, unknown scenario, unreadable log, a file that
 #     is not an LCM log);
+#  7. --json: the report as JSON (json.load), equal to the printed table: 300 frames, nothing
+#     lost, end-to-end p99 <= max; the impossible budget's 50 misses;
 #  6. sfd-node's real-time set-up (--sched-fifo, --cpu, --lock-memory): the node and its LCM
 #     receive thread run SCHED_FIFO at the priority asked, pinned to the CPU asked, with locked
 #     memory (VmLck > 0), and a closed-loop run against it ends clean; bad values exit 2;
@@ -52,10 +54,12 @@ node_refuses() {  # description pattern args...
   expect_rc 2 "$what" timeout 10 "$node_bin" "$@"
   grep -q -- "$pattern" "$tmp/out.txt" || { cat "$tmp/out.txt"; echo "hil_loopback: $what: no '$pattern'"; exit 1; }
 }
-node_refuses "sfd-node --sched-fifo 0" "--sched-fifo: expected a priority 1..99, got '0'" --sched-fifo 0
-node_refuses "sfd-node --sched-fifo 100" "--sched-fifo: expected a priority 1..99, got '100'" --sched-fifo 100
-node_refuses "sfd-node --cpu -1" "--cpu: expected a CPU number, got '-1'" --cpu -1
-node_refuses "sfd-node --cpu x" "--cpu: expected a CPU number, got 'x'" --cpu x
+node_refuses "sfd-node --sched-fifo 0" "^sfd-node: --sched-fifo: 0 is not in 1..99$" --sched-fifo 0
+node_refuses "sfd-node --sched-fifo 100" "^sfd-node: --sched-fifo: 100 is not in 1..99$" --sched-fifo=100
+node_refuses "sfd-node --cpu -1" "^sfd-node: --cpu: -1 is not in 0\.\." --cpu -1
+node_refuses "sfd-node --cpu x" "^sfd-node: --cpu: x is not an integer$" --cpu x
+expect_rc 2 "sfd-hil --json without a value" "$hil" --sim mistracking --json
+grep -q "^sfd-hil: --json needs a value$" "$tmp/out.txt" || { cat "$tmp/out.txt"; exit 1; }
 
 export SFD_BUILD="$build" SFD_TMP="$tmp"
 unshare -n bash -euo pipefail <<'NS'
@@ -100,7 +104,7 @@ run_clean() {  # NAME FRAMES RATE [sfd-node options...]
   start_node "$1" "${@:4}"
   local rc=0
   "$hil" --sim mistracking --frames "$2" --rate "$3" --timeout-ms 200 --lcm-url "$url" \
-    --csv "$SFD_TMP/$1.csv" > "$SFD_TMP/$1.txt" 2>&1 || rc=$?
+    --csv "$SFD_TMP/$1.csv" --json="$SFD_TMP/$1.json" > "$SFD_TMP/$1.txt" 2>&1 || rc=$?
   stop_node "$1"
   [ "$rc" -eq 0 ] || { cat "$SFD_TMP/$1.txt"; echo "rate $3: exit $rc, expected 0"; exit 1; }
   check_clean_run "$1" "$2"
@@ -110,6 +114,22 @@ run_clean() {  # NAME FRAMES RATE [sfd-node options...]
 run_clean rate0 300 0
 grep -q "stopped: 300 frames in, 0 refused, 300 processed" "$SFD_TMP/node_rate0.txt" || {
   cat "$SFD_TMP/node_rate0.txt"; echo "rate 0: the node did not process 300 frames"; exit 1; }
+# 7. the report as JSON: parsed, and equal to the printed table
+python3 - "$SFD_TMP/rate0.json" "$SFD_TMP/rate0.txt" <<'PY'
+import json, sys
+j = json.load(open(sys.argv[1]))
+text = open(sys.argv[2]).read()
+assert j["frames_published"] == 300 and j["verdicts_received"] == 300, j
+assert j["timing_received"] == 300 and j["lost"]["total"] == 0, j["lost"]
+assert j["result"] == "ok" and j["deadline"] is None, j["result"]
+e2e = j["latency_us"]["end_to_end"]
+assert e2e["n"] == 290 and e2e["min"] <= e2e["median"] <= e2e["p99"] <= e2e["p999"] <= e2e["max"], e2e
+row = "| end-to-end | %.0f | %.0f | %.0f | %.0f | %.0f |" % (
+    e2e["min"], e2e["median"], e2e["p99"], e2e["p999"], e2e["max"])
+assert row in text, (row, text)
+assert j["node_rejected"]["decode"]["during_run"] == 0, j["node_rejected"]
+print("ok: --json: 300 frames, nothing lost, end-to-end row as printed:", row)
+PY
 
 # 2. paced, 4x the recorded pace
 run_clean rate4 150 4
@@ -119,12 +139,15 @@ grep -q "pacing: publish lateness" "$SFD_TMP/rate4.txt" || { echo "rate 4: no pa
 start_node budget
 rc=0
 "$hil" --sim mistracking --frames 60 --rate 0 --budget-us 1 --timeout-ms 200 --lcm-url "$url" \
-  > "$SFD_TMP/budget.txt" 2>&1 || rc=$?
+  --json "$SFD_TMP/budget.json" > "$SFD_TMP/budget.txt" 2>&1 || rc=$?
 stop_node budget
 cat "$SFD_TMP/budget.txt"
 [ "$rc" -eq 3 ] || { echo "budget 1 us: exit $rc, expected 3"; exit 1; }
 grep -q "^| deadline misses (node total_us > 1 us) | 50 of 50 |" "$SFD_TMP/budget.txt" || {
   echo "budget 1 us: expected 50 of 50 measured frames (60 - 10 warm-up) to miss"; exit 1; }
+python3 -c 'import json, sys; d = json.load(open(sys.argv[1]))["deadline"]
+assert d == {"budget_us": 1, "of": "node total_us", "misses": 50, "frames": 50}, d' \
+  "$SFD_TMP/budget.json" || { echo "budget 1 us: --json deadline"; exit 1; }
 
 # 4. no node: every frame times out, exit 3
 rc=0

@@ -139,7 +139,7 @@ expect_fail "sensor.yaml key" "sensor.yaml: intrinsics: expected a list of 4 num
 expect_fail "missing folder" "nowhere/imu0/data.csv: cannot open" \
   euroc-semireal --euroc "$tmp/nowhere" -o "$tmp/x.lcmlog"
 expect_fail "no --euroc" "needs --euroc DIR and -o" euroc-semireal -o "$tmp/x.lcmlog"
-expect_fail "bad rate" "--camera-hz: expected" euroc-semireal --euroc "$tmp/good" -o "$tmp/x.lcmlog" \
+expect_fail "bad rate" "--camera-hz: 0 is not in 0.1..200" euroc-semireal --euroc "$tmp/good" -o "$tmp/x.lcmlog" \
   --camera-hz 0
 # --- no output may be an input (docs/deploy.md, "Reading logs and writing outputs") ------------
 bad same; cp "$tmp/same/$imu_csv" "$tmp/imu.orig"; cp "$tmp/same/$gt_csv" "$tmp/gt.orig"

@@ -20,7 +20,7 @@ build="$1"; py="$2"; pytypes="$3"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 sim="$build/apps/sfd-sim"
-common=(--seed 4 --frames 120 --pixel-noise 0 --depth-var 0)
+common=(--seed 4 --frames 120 --pixel-sigma-px 0 --depth-var-m2 0)
 for sc in paper-uav mistracking moving-object worst-case; do
   "$sim" "$sc" -o "$tmp/$sc.lcmlog" "${common[@]}" >/dev/null
 done
@@ -28,10 +28,10 @@ done
 cmp "$tmp/moving-object.lcmlog" "$tmp/again.lcmlog"
 "$sim" worst-case -o "$tmp/worst-half.lcmlog" "${common[@]}" --features 64 \
   --random-fraction 0.5 >/dev/null
-"$sim" mistracking -o "$tmp/imu.lcmlog" --seed 9 --frames 60 --gyro-bias 0.01,-0.02,0.005 \
-  --accel-bias 0,0,0 >/dev/null
-"$sim" mistracking -o "$tmp/imu2.lcmlog" --seed 9 --frames 60 --gyro-bias 0.01,-0.02,0.005 \
-  --accel-bias 0,0,0 >/dev/null
+"$sim" mistracking -o "$tmp/imu.lcmlog" --seed 9 --frames 60 --gyro-bias-rad-s 0.01,-0.02,0.005 \
+  --accel-bias-m-s2 0,0,0 >/dev/null
+"$sim" mistracking -o "$tmp/imu2.lcmlog" --seed 9 --frames 60 --gyro-bias-rad-s 0.01,-0.02,0.005 \
+  --accel-bias-m-s2 0,0,0 >/dev/null
 cmp "$tmp/imu.lcmlog" "$tmp/imu2.lcmlog"
 PYTHONPATH="$pytypes" "$py" - "$tmp" <<'PYEOF'
 import collections, math, sys

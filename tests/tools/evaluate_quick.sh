@@ -34,7 +34,7 @@ rc=0
 "${ev[@]}" --serial --scenarios mistracking --seeds 1 --methods parity --frames 40 --alpha 0.9 \
   --out "$tmp/fail" >/dev/null 2>"$tmp/fail.err" || rc=$?
 [ "$rc" -eq 1 ] || { echo "failing run: exit $rc, want 1" >&2; exit 1; }
-grep -q 'FAILED.*sfd-replay.*--alpha 0.9' "$tmp/fail.err" || {
+grep -q 'FAILED.*sfd-replay.*--false-alarm-rate 0.9' "$tmp/fail.err" || {
   echo "failure not reported" >&2
   cat "$tmp/fail.err" >&2
   exit 1

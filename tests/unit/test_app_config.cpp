@@ -18,6 +18,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "sfd_app_cli.hpp"
 #include "sfd_app_config.hpp"
 
 // cmocka last: its macros clash with the C++ standard headers.
@@ -514,62 +515,47 @@ void overrides_are_validated_after_the_file(void **) {
     assert_true(sfdapp::set_method("parity", &cfg, &err));  // --method parity
     cfg.origin["method"] = "--method";
     assert_true(sfdapp::validate(cfg, &err));
-    int window = 0;
-    assert_true(sfdapp::parse_int_option("--window", "9", &window, &err));
-    cfg.node.params.window_frames = window;
-    cfg.origin["window_frames"] = "--window";
+    // --window-frames 9 (sfd_app_cli.hpp: the flag of a key sets it, the range is validate()'s)
+    assert_true(sfdapp::set_key("window_frames", "9", "--window-frames", &cfg, &err));
     assert_false(sfdapp::validate(cfg, &err));
-    expect_equal(err, "--window: window_frames: 9 is not in 2..5", "an override out of range");
+    expect_equal(err, "--window-frames: window_frames: 9 is not in 2..5",
+                 "an override out of range");
 }
 
-// GIVEN command-line numbers THEN they are parsed whole: 2.5 is not an integer, 5x not a number.
-void command_line_numbers_are_parsed_whole(void **) {
-    std::string err;
-    int i = 0;
-    double d = 0.0;
-    assert_true(sfdapp::parse_int_option("--window", "4", &i, &err));
-    assert_int_equal(i, 4);
-    assert_true(sfdapp::parse_int_option("--window", "-4", &i, &err));
-    assert_int_equal(i, -4);
+// GIVEN a key's flag value THEN it is read whole by the file's type rules: 2.5 is not an
+// integer, 5x not a number; the range is left to validate() (nan included).
+void command_line_values_follow_the_file_rules(void **) {
+    AppConfig cfg;
+    std::string why;
+    assert_true(sfdapp::set_key("window_frames", "-4", "--window-frames", &cfg, &why));
+    assert_int_equal(cfg.node.params.window_frames, -4);
+    expect_equal(cfg.origin_of("window_frames"), "--window-frames", "origin");
     const std::vector<std::pair<const char *, const char *>> bad_ints = {
-        {"2.5", "--window 2.5: not an integer"},
-        {"", "--window : not an integer"},
-        {"3x", "--window 3x: not an integer"},
-        {"1e3", "--window 1e3: not an integer"},
-        {"99999999999", "--window 99999999999: out of the integer range"},
-        {"-99999999999999999999999", "--window -99999999999999999999999: out of the integer range"},
+        {"2.5", "is not an integer"},
+        {"", "is not an integer"},
+        {"3x", "is not an integer"},
+        {"1e3", "is not an integer"},
+        {"99999999999", "is outside the 32-bit integer range"},
     };
     for (const auto &b : bad_ints) {
-        assert_false(sfdapp::parse_int_option("--window", b.first, &i, &err));
-        expect_equal(err, b.second, b.first);
+        assert_false(sfdapp::set_key("window_frames", b.first, "--window-frames", &cfg, &why));
+        expect_equal(why, b.second, b.first);
     }
-    assert_true(sfdapp::parse_double_option("--alpha", "0.05", &d, &err));
-    assert_true(d == 0.05);
-    assert_true(sfdapp::parse_double_option("--alpha", "nan", &d, &err));  // validate()'s to judge
-    assert_true(std::isnan(d));
-    assert_false(sfdapp::parse_double_option("--alpha", "0.05x", &d, &err));
-    expect_equal(err, "--alpha 0.05x: not a number", "junk after a number");
-    assert_false(sfdapp::parse_double_option("--alpha", "", &d, &err));
-    expect_equal(err, "--alpha : not a number", "empty");
-    std::string method_err;
-    AppConfig cfg;
-    assert_false(sfdapp::set_method("ransac", &cfg, &method_err));
-    expect_equal(method_err, "not one of none, parity, oprf, ransac1, ransacf, both", "method");
-}
-
-// GIVEN --opt=value THEN it is split like --opt value, for the options that take a value only.
-void options_with_equals_are_split(void **) {
-    const char *argv_c[] = {"sfd-replay",       "in=1.lcmlog", "--window=4",
-                            "--no-isolation=1", "--config",    "a=b.yaml"};
-    std::vector<std::string> keep(std::begin(argv_c), std::end(argv_c));
-    std::vector<char *> argv;
-    argv.reserve(keep.size());
-    for (std::string &s : keep) argv.push_back(&s[0]);
-    const std::vector<std::string> w =
-        sfdapp::split_options(static_cast<int>(argv.size()), argv.data(), {"--window", "--config"});
-    const std::vector<std::string> expected = {"sfd-replay",       "in=1.lcmlog", "--window", "4",
-                                               "--no-isolation=1", "--config",    "a=b.yaml"};
-    assert_true(w == expected);
+    assert_true(sfdapp::set_key("false_alarm_rate", "nan", "--false-alarm-rate", &cfg, &why));
+    assert_true(std::isnan(cfg.node.params.false_alarm_rate));
+    assert_false(sfdapp::set_key("false_alarm_rate", "0.05x", "--false-alarm-rate", &cfg, &why));
+    expect_equal(why, "is not a number", "junk after a number");
+    assert_false(sfdapp::set_key("max_imu_gap_us", "2.5", "--max-imu-gap-us", &cfg, &why));
+    assert_true(
+        sfdapp::set_key("gyro_bias_rad_s", "0.1,-0.2,3e-3", "--gyro-bias-rad-s", &cfg, &why));
+    assert_true(cfg.node.params.gyro_bias_rad_s[1] == -0.2);
+    assert_false(sfdapp::set_key("gyro_bias_rad_s", "1,2", "--gyro-bias-rad-s", &cfg, &why));
+    assert_false(sfdapp::set_key("method", "ransac", "--method", &cfg, &why));
+    expect_equal(why, "is not one of none, parity, oprf, ransac1, ransacf, both", "method");
+    assert_true(sfdapp::set_key("channels.imu", "IMU2", "--channels.imu", &cfg, &why));
+    expect_equal(cfg.channels.imu, "IMU2", "a channel");
+    expect_equal(sfdapp::flag_of("filter.window_size"), "--filter.window-size", "a nested key");
+    expect_equal(sfdapp::flag_of("pixel_sigma_px"), "--pixel-sigma-px", "a top-level key");
 }
 
 void numbers_are_printed_as_written(void **) {
@@ -599,8 +585,7 @@ int main(int argc, char **argv) {
         cmocka_unit_test(file_values_are_named),
         cmocka_unit_test(load_config_validates),
         cmocka_unit_test(overrides_are_validated_after_the_file),
-        cmocka_unit_test(command_line_numbers_are_parsed_whole),
-        cmocka_unit_test(options_with_equals_are_split),
+        cmocka_unit_test(command_line_values_follow_the_file_rules),
         cmocka_unit_test(numbers_are_printed_as_written),
     };
     return cmocka_run_group_tests(tests, nullptr, nullptr);
