@@ -68,7 +68,9 @@ sfd_status_t sfd_pipeline_init(sfd_pipeline_t *p, const sfd_pipeline_config_t *c
                              m == SFD_METHOD_RANSACF || m == SFD_METHOD_BOTH;
     if (needs_filter && !cfg->nav.enabled) return SFD_ERR_INVAL;
     if (sfd_time_guard_params_validate(&cfg->time) != SFD_OK) return SFD_ERR_INVAL;
-    if (sfd_nav_init(&p->nav, &cfg->nav, &cfg->params) != SFD_OK) return SFD_ERR_INVAL;
+    p->stage_params = cfg->params;
+    if (m == SFD_METHOD_BOTH) p->stage_params.false_alarm_rate *= 0.5;
+    if (sfd_nav_init(&p->nav, &cfg->nav, &p->stage_params) != SFD_OK) return SFD_ERR_INVAL;
     (void)sfd_time_guard_init(&p->imu_time, &cfg->time); /* validated above */
     (void)sfd_time_guard_init(&p->frame_time, &cfg->time);
     p->cfg = *cfg;
@@ -103,7 +105,7 @@ int sfd_pipeline_set_camera(sfd_pipeline_t *p, const sfd_camera_t *cam,
     if (p->have_camera && same_calibration(cam, &p->camera, ext, &p->ext)) {
         return SFD_REJECT_NONE; /* periodic republication of the same calibration */
     }
-    if (sfd_parity_init(&p->parity, &p->cfg.params, cam) != SFD_OK) {
+    if (sfd_parity_init(&p->parity, &p->stage_params, cam) != SFD_OK) {
         sfd_pipeline_count_reject(p, SFD_REJECT_CORE);
         return SFD_REJECT_CORE;
     }
