@@ -900,21 +900,32 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
     CamPose pose[SFD_MAX_WINDOW];
     Vec3 p_I[SFD_MAX_WINDOW];
     Mat3 R_I[SFD_MAX_WINDOW];
-    int col[SFD_MAX_WINDOW][2];  // columns of (dp, dtheta) of each frame's IMU pose in P
+    // The test's error state is the m poses only, (dp, dtheta) of frame k in columns 6k..6k+5:
+    // their covariance is gathered from P into the update's scratch (unused between frames), so
+    // the projection and the gate work on 6 m columns instead of the filter's 15 + 6 L.
+    int src[6 * SFD_MAX_WINDOW];  // column of P of each test column
     for (int k = 0; k < m; ++k) {
         const bool cur = (k == m - 1);
         const double *q = cur ? w->q_ItoW : w->clones[c0 + k].q_ItoW;
         R_I[k] = quat_rot(q);
         p_I[k] = v3(cur ? w->p_IinW_m : w->clones[c0 + k].p_IinW_m);
         pose[k] = cam_pose(R_I[k], p_I[k], *ext);
-        col[k][0] = cur ? P_ : kImu + 6 * (c0 + k);
-        col[k][1] = cur ? TH : kImu + 6 * (c0 + k) + 3;
+        const int cp = cur ? P_ : kImu + 6 * (c0 + k);
+        const int ct = cur ? TH : kImu + 6 * (c0 + k) + 3;
+        for (int j = 0; j < 3; ++j) {
+            src[6 * k + j] = cp + j;
+            src[6 * k + 3 + j] = ct + j;
+        }
+    }
+    const int n = 6 * m;
+    double(*Pc)[SFD_MSCKF_DIM] = w->scratch_work.S;
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) Pc[i][j] = w->P[src[i]][src[j]];
     }
     const int dk = m - 1;
     Vec3 pf;
     if (!triangulate(*w, t, pose, depth_row, dk, &pf)) return SFD_ERR_NUMERIC;
     sfd_msckf_track_t &tr = w->scratch_track;
-    const int n = dim(*w);
     const int rows = 2 * m + (depth_row ? 1 : 0);
     tr.rows = rows;
     tr.n = n;
@@ -936,8 +947,8 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
         for (int a = 0; a < 2; ++a) {
             const int r = 2 * k + a;
             for (int j = 0; j < 3; ++j) {
-                tr.Hx[r][col[k][0] + j] = -Hf(a, j);
-                tr.Hx[r][col[k][1] + j] = Hth(a, j);
+                tr.Hx[r][6 * k + j] = -Hf(a, j);
+                tr.Hx[r][6 * k + 3 + j] = Hth(a, j);
                 tr.Hf[r][j] = Hf(a, j);
             }
         }
@@ -954,13 +965,13 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
         const Vec3 pc = pose[dk].R_WtoC * (pf - pose[dk].p_CinW);
         const Mat3 dth = pose[dk].R_WtoC * skew(pf - p_I[dk]);
         for (int j = 0; j < 3; ++j) {
-            tr.Hx[r][col[dk][0] + j] = -pose[dk].R_WtoC(2, j);
-            tr.Hx[r][col[dk][1] + j] = dth(2, j);
+            tr.Hx[r][6 * dk + j] = -pose[dk].R_WtoC(2, j);
+            tr.Hx[r][6 * dk + 3 + j] = dth(2, j);
             tr.Hf[r][j] = pose[dk].R_WtoC(2, j);
         }
         tr.r[r] = t.depth_m - pc.z();
         tr.R[r][r] = t.depth_var_m2 + w->prm.depth_var_floor_m2;
     }
     if (sfd_msckf_track_project(&tr) != SFD_OK) return SFD_ERR_NUMERIC;
-    return sfd_msckf_track_gate(&tr, &w->P[0][0], gamma, dof);
+    return sfd_msckf_track_gate(&tr, &Pc[0][0], gamma, dof);
 }
