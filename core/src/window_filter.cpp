@@ -900,10 +900,8 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
     CamPose pose[SFD_MAX_WINDOW];
     Vec3 p_I[SFD_MAX_WINDOW];
     Mat3 R_I[SFD_MAX_WINDOW];
-    // The test's error state is the m poses only, (dp, dtheta) of frame k in columns 6k..6k+5:
-    // their covariance is gathered from P into the update's scratch (unused between frames), so
-    // the projection and the gate work on 6 m columns instead of the filter's 15 + 6 L.
-    int src[6 * SFD_MAX_WINDOW];  // column of P of each test column
+    // The poses' error state: (dp, dtheta) of frame k, at columns src[6k..6k+5] of P.
+    int src[6 * SFD_MAX_WINDOW];
     for (int k = 0; k < m; ++k) {
         const bool cur = (k == m - 1);
         const double *q = cur ? w->q_ItoW : w->clones[c0 + k].q_ItoW;
@@ -917,21 +915,22 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
             src[6 * k + 3 + j] = ct + j;
         }
     }
-    const int n = 6 * m;
-    double(*Pc)[SFD_MSCKF_DIM] = w->scratch_work.S;
-    for (int i = 0; i < n; ++i) {
-        for (int j = 0; j < n; ++j) Pc[i][j] = w->P[src[i]][src[j]];
-    }
     const int dk = m - 1;
     Vec3 pf;
     if (!triangulate(*w, t, pose, depth_row, dk, &pf)) return SFD_ERR_NUMERIC;
+    // Row i of the residual depends on frame blk[i]'s pose through the 6-vector hp[i] (dp,
+    // dtheta) and on the point through Hf. The covariance of the stacked residual,
+    // H_x P H_x^T + R, is formed from the 6x6 blocks of P the rows touch (H_x is block sparse),
+    // then projected with the point's null space together with r: eq. (2) with H_x folded in.
     sfd_msckf_track_t &tr = w->scratch_track;
     const int rows = 2 * m + (depth_row ? 1 : 0);
+    double hp[SFD_MSCKF_TRACK_ROWS][6];
+    int blk[SFD_MSCKF_TRACK_ROWS];
     tr.rows = rows;
-    tr.n = n;
+    tr.n = 1;  // the pose part is inside R below: one zero column
     tr.projected = 0;
     for (int i = 0; i < rows; ++i) {
-        for (int j = 0; j < n; ++j) tr.Hx[i][j] = 0.0;
+        tr.Hx[i][0] = 0.0;
         for (int j = 0; j < rows; ++j) tr.R[i][j] = 0.0;
     }
     // Jacobians at the current estimates (a detection test over one window needs the right
@@ -946,9 +945,10 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
         const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> Hf = Jp * pose[k].R_WtoC;
         for (int a = 0; a < 2; ++a) {
             const int r = 2 * k + a;
+            blk[r] = k;
             for (int j = 0; j < 3; ++j) {
-                tr.Hx[r][6 * k + j] = -Hf(a, j);
-                tr.Hx[r][6 * k + 3 + j] = Hth(a, j);
+                hp[r][j] = -Hf(a, j);
+                hp[r][3 + j] = Hth(a, j);
                 tr.Hf[r][j] = Hf(a, j);
             }
         }
@@ -964,14 +964,31 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
         const int r = 2 * m;
         const Vec3 pc = pose[dk].R_WtoC * (pf - pose[dk].p_CinW);
         const Mat3 dth = pose[dk].R_WtoC * skew(pf - p_I[dk]);
+        blk[r] = dk;
         for (int j = 0; j < 3; ++j) {
-            tr.Hx[r][6 * dk + j] = -pose[dk].R_WtoC(2, j);
-            tr.Hx[r][6 * dk + 3 + j] = dth(2, j);
+            hp[r][j] = -pose[dk].R_WtoC(2, j);
+            hp[r][3 + j] = dth(2, j);
             tr.Hf[r][j] = pose[dk].R_WtoC(2, j);
         }
         tr.r[r] = t.depth_m - pc.z();
         tr.R[r][r] = t.depth_var_m2 + w->prm.depth_var_floor_m2;
     }
+    // R += H_x P H_x^T, row pair by row pair through the 6x6 block of P they touch.
+    for (int i = 0; i < rows; ++i) {
+        const int *si = src + static_cast<std::ptrdiff_t>(6) * blk[i];
+        for (int j = i; j < rows; ++j) {
+            const int *sj = src + static_cast<std::ptrdiff_t>(6) * blk[j];
+            double v = 0.0;
+            for (int a = 0; a < 6; ++a) {
+                double pa = 0.0;
+                for (int b = 0; b < 6; ++b) pa += w->P[si[a]][sj[b]] * hp[j][b];
+                v += hp[i][a] * pa;
+            }
+            tr.R[i][j] += v;
+            if (j != i) tr.R[j][i] += v;
+        }
+    }
     if (sfd_msckf_track_project(&tr) != SFD_OK) return SFD_ERR_NUMERIC;
-    return sfd_msckf_track_gate(&tr, &Pc[0][0], gamma, dof);
+    const double zero = 0.0;  // the pose part is in R_o already
+    return sfd_msckf_track_gate(&tr, &zero, gamma, dof);
 }
