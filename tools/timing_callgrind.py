@@ -40,7 +40,7 @@ STAGES = [
     ("decode", "sfd_lcm_decode_features"),
     ("imu", "sfd_lcm_decode_imu"),
     ("propagate", "sfd_nav_advance"),
-    ("parity", "sfd_parity_push_frame"),
+    ("parity", "sfd_parity_push_frame_filter"),  # sfd_parity_push_frame calls it
     ("select", "sfd_assoc_select"),
     ("apply", "sfd_assoc_apply"),
     ("nav build", "sfd_nav_build"),
