@@ -527,8 +527,11 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
     sfd_window_test_obs_t obs;
     for (int i = 0; i < nf.num; ++i) {
         sfd_parity_obs_t &newest = nf.obs[i];
-        if (!newest.valid || newest.run < L) continue;
-        load_track(det, i, L, scale, &obs);
+        // A track seen in fewer than L frames is tested over the frames it has (at least 2):
+        // with the poses known, two frames already leave a residual.
+        const int m_short = newest.run < L ? newest.run : L;
+        if (!newest.valid || m_short < 2) continue;
+        load_track(det, i, m_short, scale, &obs);
         double gamma = 0.0;
         int32_t dof = 0;
         sfd_feature_result_t *v = &out->features[i];

@@ -299,7 +299,8 @@ sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
  *
  * When the parameters say translation_known and @p filter holds the window's frames (its newest
  * L - 1 clones are the window's older frames and its current state is at this frame's time),
- * every feature tracked through the L frames is tested alone with sfd_window_test_track(): the
+ * every feature tracked through at least 2 of the L frames is tested alone, over min(its run,
+ * L) frames, with sfd_window_test_track(): the
  * filter's poses and their covariance, the newest depth prior as a measurement, the threshold
  * chi2(dof, 1 - alpha). Reason SFD_REASON_FEATURE_TEST; a feature that cannot be triangulated is
  * UNTESTED (SFD_REASON_RANK). Otherwise (no filter, not started, a frame it did not clone, or
