@@ -193,9 +193,9 @@ bool innovation(const Mat3 &P, const Linear &lin, Mat32 *PHt, Mat2 *Sinv, Mat2 *
     *PHt = P * lin.H.transpose();
     Mat2 s = lin.H * (*PHt) + lin.Rn;
     s = 0.5 * (s + s.transpose());
-    const double det = s(0, 0) * s(1, 1) - s(0, 1) * s(1, 0);
+    const double det = la::det_2x2(s(0, 0), s(0, 1), s(1, 0), s(1, 1));
     if (!(s(0, 0) > 0.0) || !(det > 0.0) || !std::isfinite(det)) return false;
-    *Sinv << s(1, 1) / det, -s(0, 1) / det, -s(1, 0) / det, s(0, 0) / det;
+    *Sinv = la::inverse_2x2(s(0, 0), s(0, 1), s(1, 0), s(1, 1), det);
     *S = s;
     return all_finite(Sinv->data(), 4);
 }
@@ -218,10 +218,10 @@ double map_cost(const double (*L)[3], const Vec3 &x0, const Vec3 &x, const Vec2 
     la::forward_solve<3>(L, 3, d, w);
     const Vec2 r = z - lin.h;
     const Mat2 &N = lin.Rn;
-    const double det = N(0, 0) * N(1, 1) - N(0, 1) * N(1, 0);
-    if (!(det > 0.0) || !(N(0, 0) > 0.0)) return std::numeric_limits<double>::infinity();
-    const double q =
-        (N(1, 1) * r(0) * r(0) - 2.0 * N(0, 1) * r(0) * r(1) + N(0, 0) * r(1) * r(1)) / det;
+    double q = 0.0;
+    if (!la::inv_quadratic_2x2(N(0, 0), N(0, 1), N(1, 0), N(1, 1), r(0), r(1), &q)) {
+        return std::numeric_limits<double>::infinity();
+    }
     return w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + q;
 }
 

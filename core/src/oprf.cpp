@@ -4,6 +4,7 @@
 // transfer under degenerate motion, and the individual-compatibility gate of set 1 and set 2
 // (core/docs/association.md "OPRF", "Noise scale", "Gate").
 #include "association_internal.hpp"
+#include "small_linalg.hpp"
 #include "sfd/sfd_prng.h"
 #include "sfd/sfd_ransac.h"
 
@@ -109,10 +110,11 @@ double mahalanobis2(const Linearized &lin, const Mat6 &Lss) {
         s11 += hl1[k] * hl1[k];
         s01 += hl0[k] * hl1[k];
     }
-    const double det = s00 * s11 - s01 * s01;
-    if (!(det > 0.0) || !(s00 > 0.0)) return std::numeric_limits<double>::infinity();
-    const double x = lin.nu(0), y = lin.nu(1);
-    return (s11 * x * x - 2.0 * s01 * x * y + s00 * y * y) / det;
+    double q = 0.0;
+    if (!la::inv_quadratic_2x2(s00, s01, s01, s11, lin.nu(0), lin.nu(1), &q)) {
+        return std::numeric_limits<double>::infinity();
+    }
+    return q;
 }
 
 /// Expected parallax (px) between the previous camera and the prior current camera: focal length

@@ -11,6 +11,7 @@
 #include "rotation.hpp"
 #include "sfd/sfd_chi2.h"
 #include "sfd/sfd_window.h"
+#include "small_linalg.hpp"
 #include "track_index.h"
 
 namespace sfd {
@@ -213,12 +214,9 @@ CamPose cam_pose(const Mat3 &R_ItoW, const Vec3 &p_IinW, const sfd_extrinsics_t 
 
 /// Inverse of a symmetric 2x2 given as (xx, xy, yy); false unless positive definite.
 bool inv2(const double c[3], Mat2 *out) {
-    const double det = c[0] * c[2] - c[1] * c[1];
+    const double det = la::det_2x2(c[0], c[1], c[1], c[2]);
     if (!(c[0] > 0.0) || !(det > 0.0) || !std::isfinite(det)) return false;
-    (*out)(0, 0) = c[2] / det;
-    (*out)(0, 1) = -c[1] / det;
-    (*out)(1, 0) = -c[1] / det;
-    (*out)(1, 1) = c[0] / det;
+    *out = la::inverse_2x2(c[0], c[1], c[1], c[2], det);
     return true;
 }
 
