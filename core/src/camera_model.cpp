@@ -16,6 +16,7 @@
 #include "core_private.hpp"
 
 #include "sfd/sfd_camera.h"
+#include "small_linalg.hpp"
 
 namespace sfd {
 namespace {
@@ -193,10 +194,8 @@ bool invertible(const Mat2 &J) {
 
 /// Inverse of a 2x2 matrix whose determinant was checked by invertible().
 Mat2 inverse2(const Mat2 &J) {
-    const double det = J.determinant();
-    Mat2 inv;
-    inv << J(1, 1) / det, -J(0, 1) / det, -J(1, 0) / det, J(0, 0) / det;
-    return inv;
+    const double det = la::det_2x2(J(0, 0), J(0, 1), J(1, 0), J(1, 1));
+    return la::inverse_2x2(J(0, 0), J(0, 1), J(1, 0), J(1, 1), det);
 }
 
 /// A Newton step at the rounding level of double precision at @p x: |step| <= 4 eps max(1, |x|).

@@ -221,7 +221,7 @@ bool single_update_pose(const sfd_ekf_t &ekf, const Mat3 &R_ItoW, const Mat6 &P_
                         const Linearized &lin, Mat3 *R_ItoW_out, Vec3 *p_IinW_out) {
     const Eigen::Matrix<double, 6, 2> PHt = P_ss * lin.H.transpose();
     Mat2 S = lin.H * PHt + lin.R;
-    const double det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+    const double det = la::det_2x2(S(0, 0), S(0, 1), S(1, 0), S(1, 1));
     if (!(S(0, 0) > 0.0) || !(det > 0.0) || !std::isfinite(det)) return false;
     const Vec2 Sinv_nu((S(1, 1) * lin.nu(0) - S(0, 1) * lin.nu(1)) / det,
                        (-S(1, 0) * lin.nu(0) + S(0, 0) * lin.nu(1)) / det);
@@ -516,10 +516,9 @@ void joseph(const MatN &P, const MatN6 &KHs, const MatN6 &U, MatN *out) {
 namespace sfd {
 
 bool PoseInformation::add(const Linearized &lin) {
-    const double det = lin.R(0, 0) * lin.R(1, 1) - lin.R(0, 1) * lin.R(1, 0);
+    const double det = la::det_2x2(lin.R(0, 0), lin.R(0, 1), lin.R(1, 0), lin.R(1, 1));
     if (!(det > 0.0) || !(lin.R(0, 0) > 0.0)) return false;
-    Mat2 Rinv;
-    Rinv << lin.R(1, 1) / det, -lin.R(0, 1) / det, -lin.R(1, 0) / det, lin.R(0, 0) / det;
+    const Mat2 Rinv = la::inverse_2x2(lin.R(0, 0), lin.R(0, 1), lin.R(1, 0), lin.R(1, 1), det);
     const Eigen::Matrix<double, 6, 2> HtRinv = lin.H.transpose() * Rinv;
     Y.noalias() += HtRinv * lin.H;
     b.noalias() += HtRinv * lin.nu;

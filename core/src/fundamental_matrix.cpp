@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Fundamental-matrix RANSAC baseline, Kilic 2014 Section 3.1.2 / Table 2 (sfd/sfd_fundamental.h,
-// core/docs/fundamental_matrix.md).
+// core/docs/fundamental_matrix.md), and its selection inside the EKF association
+// (sfd_assoc.h's SFD_METHOD_RANSACF, core/docs/association.md).
+#include "association_internal.hpp"
 #include "core_private.hpp"
 #include "sampson.hpp"
 #include "sfd/sfd_fundamental.h"
@@ -341,3 +343,35 @@ extern "C" sfd_status_t sfd_ransacf(const double (*x_prev)[2], const double (*x_
     out->num_inliers = best;
     return SFD_OK;
 }
+
+namespace sfd {
+namespace assoc {
+
+sfd_status_t ransacf_select(sfd_assoc_t *a, const SelectInputs &in, sfd_assoc_result_t *out) {
+    const sfd_assoc_params_t &prm = a->params;
+    const int32_t nv = in.nv;
+    a->stage = SFD_STAGE_RANSAC_F;
+    sfd_ransacf_result_t rf;
+    // cur[] holds the compacted inlier flags of the nv valid matches.
+    const sfd_status_t st = sfd_ransacf(a->x_prev, a->x_curr, nv, a->chi2_1 * in.sigma2,
+                                        prm.confidence, prm.max_hypotheses, &a->rng, a->cur, &rf);
+    if (st == SFD_ERR_RANGE || st == SFD_ERR_NUMERIC) {
+        // fewer than 8 matches, or every sample degenerate: nothing can be judged
+        for (int32_t k = 0; k < nv; ++k) a->valid[a->valid_idx[k]] = 0U;
+        return SFD_OK;
+    }
+    if (st != SFD_OK) return st;
+    out->hypotheses_used = rf.hypotheses_used;
+    out->budget_exhausted = rf.budget_exhausted;
+    out->inliers_stage1 = rf.num_inliers;
+    for (int32_t k = 0; k < nv; ++k) {
+        const int32_t i = a->valid_idx[k];
+        a->best[i] = a->cur[k];
+        const double d = sampson_px2(rf.F, a->x_prev[k], a->x_curr[k]);
+        a->best_stat[i] = static_cast<float>(std::fmin(d / in.sigma2, 3.0e38));
+    }
+    return SFD_OK;
+}
+
+}  // namespace assoc
+}  // namespace sfd

@@ -12,6 +12,7 @@
 #include "rotation.hpp"
 #include "small_linalg.hpp"
 #include "sfd/sfd_landmarks.h"
+#include "track_index.h"
 
 namespace sfd {
 namespace {
@@ -35,16 +36,13 @@ using Mat32 = Eigen::Matrix<double, 3, 2, Eigen::RowMajor>;
 
 static_assert(kSlots >= 2 * kCap, "the index must keep its load factor <= 1/2");
 
-/// Home slot of a track id: Fibonacci hashing (multiply by 2^64 / golden ratio, keep the high
-/// 32 bits) scaled to [0, kSlots) without a division. Consecutive ids spread evenly.
+/// Home slot of a track id (track_index.h).
 int32_t home_slot(int64_t track_id) {
-    const uint64_t h = static_cast<uint64_t>(track_id) * 0x9E3779B97F4A7C15ULL;
-    const uint64_t hi = h >> 32U;
-    return static_cast<int32_t>((hi * static_cast<uint64_t>(kSlots)) >> 32U);
+    return sfd_track_index_home(track_id, kSlots);
 }
 
 int32_t next_slot(int32_t s) {
-    return (s + 1 == kSlots) ? 0 : s + 1;
+    return sfd_track_index_next(s, kSlots);
 }
 
 bool entry_in_range(int32_t e) {
@@ -57,21 +55,9 @@ bool entry_in_range(int32_t e) {
 /// range (a corrupted caller-owned struct) ends the probe as if empty: nothing is ever read or
 /// written outside the arrays. At most count + 1 probes.
 int32_t probe(const sfd_landmark_map_t &map, int64_t track_id, int32_t *slot_out) {
-    int32_t s = home_slot(track_id);
-    for (int32_t i = 0; i < kSlots; ++i) {
-        const int32_t e = map.index[s];
-        if (!entry_in_range(e)) {
-            *slot_out = s;
-            return -1;
-        }
-        if (map.entries[e].track_id == track_id) {
-            *slot_out = s;
-            return e;
-        }
-        s = next_slot(s);
-    }
-    *slot_out = -1;
-    return -1;
+    const sfd_track_index_t t = sfd_track_index_view_i32(
+        map.index, kSlots, &map.entries[0].track_id, sizeof map.entries[0], kCap);
+    return sfd_track_index_probe(&t, track_id, slot_out);
 }
 
 /// Deletes index slot @p s by backward shifting (Knuth 6.4 Algorithm R): later members of the
@@ -207,9 +193,9 @@ bool innovation(const Mat3 &P, const Linear &lin, Mat32 *PHt, Mat2 *Sinv, Mat2 *
     *PHt = P * lin.H.transpose();
     Mat2 s = lin.H * (*PHt) + lin.Rn;
     s = 0.5 * (s + s.transpose());
-    const double det = s(0, 0) * s(1, 1) - s(0, 1) * s(1, 0);
+    const double det = la::det_2x2(s(0, 0), s(0, 1), s(1, 0), s(1, 1));
     if (!(s(0, 0) > 0.0) || !(det > 0.0) || !std::isfinite(det)) return false;
-    *Sinv << s(1, 1) / det, -s(0, 1) / det, -s(1, 0) / det, s(0, 0) / det;
+    *Sinv = la::inverse_2x2(s(0, 0), s(0, 1), s(1, 0), s(1, 1), det);
     *S = s;
     return all_finite(Sinv->data(), 4);
 }
@@ -232,10 +218,10 @@ double map_cost(const double (*L)[3], const Vec3 &x0, const Vec3 &x, const Vec2 
     la::forward_solve<3>(L, 3, d, w);
     const Vec2 r = z - lin.h;
     const Mat2 &N = lin.Rn;
-    const double det = N(0, 0) * N(1, 1) - N(0, 1) * N(1, 0);
-    if (!(det > 0.0) || !(N(0, 0) > 0.0)) return std::numeric_limits<double>::infinity();
-    const double q =
-        (N(1, 1) * r(0) * r(0) - 2.0 * N(0, 1) * r(0) * r(1) + N(0, 0) * r(1) * r(1)) / det;
+    double q = 0.0;
+    if (!la::inv_quadratic_2x2(N(0, 0), N(0, 1), N(1, 0), N(1, 1), r(0), r(1), &q)) {
+        return std::numeric_limits<double>::infinity();
+    }
     return w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + q;
 }
 

@@ -6,6 +6,7 @@
 
 #include "sfd/sfd_chi2.h"
 #include "sfd/sfd_reject.h"
+#include "track_index.h"
 
 void sfd_nav_config_default(sfd_nav_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
@@ -308,41 +309,24 @@ int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us) {
     return SFD_REJECT_NONE;
 }
 
-/* The previous frame's track index: open addressing with linear probing over
- * SFD_NAV_TRACK_SLOTS (more than twice SFD_MAX_FEATURES, so a probe sequence always ends at an
- * empty slot). Holds the first index of each id, as a front-to-back search of prev_track would
- * find it. */
-static int32_t track_slot(int64_t id) {
-    const uint64_t h = (uint64_t)id * 0x9E3779B97F4A7C15ULL;
-    return (int32_t)((h >> 17) % (uint64_t)SFD_NAV_TRACK_SLOTS);
-}
-
+/* The previous frame's track index (track_index.h) over SFD_NAV_TRACK_SLOTS (more than twice
+ * SFD_MAX_FEATURES, so a probe sequence always ends at an empty slot). Holds the first index of
+ * each id, as a front-to-back search of prev_track would find it. */
 static void prev_index_build(sfd_nav_t *nav) {
-    for (int32_t s = 0; s < SFD_NAV_TRACK_SLOTS; ++s) nav->prev_index[s] = -1;
-    for (int32_t k = 0; k < nav->prev_n; ++k) {
-        int32_t s = track_slot(nav->prev_track[k]);
-        for (int32_t probe = 0; probe < SFD_NAV_TRACK_SLOTS; ++probe) {
-            const int16_t v = nav->prev_index[s];
-            if (v < 0) {
-                nav->prev_index[s] = (int16_t)k;
-                break;
-            }
-            if (nav->prev_track[v] == nav->prev_track[k]) break; /* keep the first */
-            s = (s + 1 == SFD_NAV_TRACK_SLOTS) ? 0 : s + 1;
-        }
-    }
+    const sfd_track_index_t t =
+        sfd_track_index_i16(nav->prev_index, SFD_NAV_TRACK_SLOTS, nav->prev_track,
+                            sizeof nav->prev_track[0], nav->prev_n);
+    sfd_track_index_clear(&t);
+    for (int32_t k = 0; k < nav->prev_n; ++k)
+        (void)sfd_track_index_add_first(&t, nav->prev_track[k], k);
 }
 
 /* Index of @p id in the previous frame (its first occurrence), or -1. */
 static int32_t prev_index_find(const sfd_nav_t *nav, int64_t id) {
-    int32_t s = track_slot(id);
-    for (int32_t probe = 0; probe < SFD_NAV_TRACK_SLOTS; ++probe) {
-        const int16_t v = nav->prev_index[s];
-        if (v < 0 || v >= nav->prev_n) return -1;
-        if (nav->prev_track[v] == id) return v;
-        s = (s + 1 == SFD_NAV_TRACK_SLOTS) ? 0 : s + 1;
-    }
-    return -1;
+    const sfd_track_index_t t =
+        sfd_track_index_view_i16(nav->prev_index, SFD_NAV_TRACK_SLOTS, nav->prev_track,
+                                 sizeof nav->prev_track[0], nav->prev_n);
+    return sfd_track_index_find(&t, id);
 }
 
 /* Covariance of normalized coordinates xn from isotropic pixel noise sigma through the camera

@@ -6,6 +6,7 @@
 #include "rotation.hpp"
 #include "sfd/sfd_camera.h"
 #include "sfd/sfd_parity.h"
+#include "track_index.h"
 
 namespace sfd {
 namespace parity {
@@ -22,33 +23,17 @@ int ring_index(const sfd_parity_t &det, int back) {
     return (det.head - back + kRing) % kRing;
 }
 
-int hash_slot(int64_t id) {
-    const uint64_t h = static_cast<uint64_t>(id) * 0x9E3779B97F4A7C15ULL;
-    return static_cast<int>((h >> 17) % static_cast<uint64_t>(kSlots));
-}
-
-// Index stored for `id` in table, or -1. Linear probing, at most kSlots probes.
+// Index stored for `id` in table (over the observations of fr), or -1 (track_index.h).
 int hash_find(const int16_t *table, const sfd_parity_frame_t &fr, int64_t id) {
-    int s = hash_slot(id);
-    for (int probe = 0; probe < kSlots; ++probe) {
-        const int16_t v = table[s];
-        if (v < 0) return -1;
-        if (fr.obs[v].track_id == id) return v;
-        s = (s + 1 == kSlots) ? 0 : s + 1;
-    }
-    return -1;
+    const sfd_track_index_t t =
+        sfd_track_index_view_i16(table, kSlots, &fr.obs[0].track_id, sizeof fr.obs[0], fr.num);
+    return sfd_track_index_find(&t, id);
 }
 
+// The table has more than twice as many slots as a frame has features: never full.
 void hash_insert(int16_t *table, int64_t id, int16_t index) {
-    int s = hash_slot(id);
-    for (int probe = 0; probe < kSlots; ++probe) {
-        if (table[s] < 0) {
-            table[s] = index;
-            return;
-        }
-        s = (s + 1 == kSlots) ? 0 : s + 1;
-    }
-    // Unreachable: the table has more than twice as many slots as a frame has features.
+    const sfd_track_index_t t = sfd_track_index_i16(table, kSlots, nullptr, 0, 0);
+    (void)sfd_track_index_insert(&t, id, index);
 }
 
 // Spread-out ordering key: Morton (Z-order) code of the pixel position in 16-px cells. Walking

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "bits_equal.h"
+#include "track_index.h"
 
 const char *sfd_reject_reason_str(int reason) {
     static const char *const names[SFD_REJECT_NUM_REASONS] = {"decode",
@@ -198,17 +199,14 @@ static void count_frame_gap(sfd_pipeline_t *p, int64_t dt_us) {
     if (p->period_count < SFD_PIPELINE_PERIOD_SAMPLES) p->period_count++;
 }
 
-static int32_t dup_slot(int64_t track_id) {
-    uint64_t h = (uint64_t)track_id * 0x9E3779B97F4A7C15ULL;
-    h ^= h >> 29;
-    return (int32_t)(h % (uint64_t)SFD_PIPELINE_DUP_SLOTS);
-}
-
 /* Counts an accepted frame's malformed features (they stay in the frame; the detectors judge
  * them as before): a NaN/Inf pixel, a track id repeated in the frame, a pixel outside the
  * calibrated image. */
 static void count_malformed_features(sfd_pipeline_t *p, const sfd_frame_t *frame) {
-    for (int32_t k = 0; k < SFD_PIPELINE_DUP_SLOTS; ++k) p->dup_index[k] = -1;
+    const sfd_track_index_t dup =
+        sfd_track_index_i16(p->dup_index, SFD_PIPELINE_DUP_SLOTS, &frame->features[0].track_id,
+                            sizeof frame->features[0], frame->num_features);
+    sfd_track_index_clear(&dup);
     const double w = (double)p->camera.width_px, h = (double)p->camera.height_px;
     for (int32_t i = 0; i < frame->num_features; ++i) {
         const sfd_feature_t *f = &frame->features[i];
@@ -217,20 +215,9 @@ static void count_malformed_features(sfd_pipeline_t *p, const sfd_frame_t *frame
         } else if (!(f->u_px >= 0.0 && f->u_px < w && f->v_px >= 0.0 && f->v_px < h)) {
             p->counters.rejected[SFD_REJECT_FEATURE_OUTSIDE]++;
         }
-        /* load factor <= 1/2: an empty slot is found within SFD_PIPELINE_DUP_SLOTS probes */
-        int32_t s = dup_slot(f->track_id);
-        for (int32_t probe = 0; probe < SFD_PIPELINE_DUP_SLOTS; ++probe) {
-            const int16_t e = p->dup_index[s];
-            if (e < 0) {
-                p->dup_index[s] = (int16_t)i;
-                break;
-            }
-            if (frame->features[e].track_id == f->track_id) {
-                p->counters.rejected[SFD_REJECT_FEATURE_DUPLICATE]++;
-                break;
-            }
-            s = (s + 1) % SFD_PIPELINE_DUP_SLOTS;
-        }
+        /* load factor <= 1/2: the table is never full */
+        const int32_t first = sfd_track_index_add_first(&dup, f->track_id, i);
+        if (first >= 0 && first != i) p->counters.rejected[SFD_REJECT_FEATURE_DUPLICATE]++;
     }
 }
 

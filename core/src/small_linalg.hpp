@@ -2,7 +2,8 @@
 // Small dense linear algebra on caller-provided row-major arrays of fixed capacity (stride K) and
 // size n <= K: Cholesky factorization, triangular solves, SPD inverse, and the 2x2 symmetric
 // pseudo-inverse. Loops are bounded by n <= K. Used where the sizes change per window (L, n at
-// run time) and a fixed-size Eigen type would not fit.
+// run time) and a fixed-size Eigen type would not fit. Also the core's one 2x2 determinant,
+// adjugate inverse and inverse quadratic form (the innovation covariances of one observation).
 //
 // The size n is an `int`, or a compile-time `Dim<D>` (std::integral_constant): then every loop
 // has a constant trip count and the compiler unrolls the small ones. Both give bit-identical
@@ -133,6 +134,31 @@ inline double pinv_quadratic_2x2(const double G[2][2], const double g[2], int *r
         *rank = 2;
     }
     return q;
+}
+
+/// Determinant of [a00 a01; a10 a11]: a00 a11 - a01 a10 (bit-identical to Eigen's 2x2
+/// determinant(), whose products are the same).
+inline double det_2x2(double a00, double a01, double a10, double a11) {
+    return a00 * a11 - a01 * a10;
+}
+
+/// Inverse of [a00 a01; a10 a11] by its adjugate over @p det, its determinant (det_2x2()); the
+/// caller has checked that det is usable.
+inline Mat2 inverse_2x2(double a00, double a01, double a10, double a11, double det) {
+    Mat2 inv;
+    inv << a11 / det, -a01 / det, -a10 / det, a00 / det;
+    return inv;
+}
+
+/// *q = (x, y) A^-1 (x, y)^T for a symmetric 2x2 A = [a00 a01; a10 a11] by its adjugate,
+/// (a11 x^2 - 2 a01 x y + a00 y^2) / det; false (q untouched) when det (det_2x2()) or a00 is not
+/// positive (A not positive definite).
+inline bool inv_quadratic_2x2(double a00, double a01, double a10, double a11, double x, double y,
+                              double *q) {
+    const double det = det_2x2(a00, a01, a10, a11);
+    if (!(det > 0.0) || !(a00 > 0.0)) return false;
+    *q = (a11 * x * x - 2.0 * a01 * x * y + a00 * y * y) / det;
+    return true;
 }
 
 }  // namespace la

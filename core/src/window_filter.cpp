@@ -11,6 +11,8 @@
 #include "rotation.hpp"
 #include "sfd/sfd_chi2.h"
 #include "sfd/sfd_window.h"
+#include "small_linalg.hpp"
+#include "track_index.h"
 
 namespace sfd {
 namespace {
@@ -169,33 +171,18 @@ void start_common(sfd_window_t *w, int64_t utime) {
     reset_pending(w);
 }
 
-int32_t slot_of(int64_t id) {
-    const uint64_t h = static_cast<uint64_t>(id) * 0x9E3779B97F4A7C15ULL;
-    return static_cast<int32_t>((h >> 17) % static_cast<uint64_t>(SFD_WINDOW_INDEX_SLOTS));
-}
-
-/// Index of track @p id in w->tracks, or -1 (open addressing, linear probing; the table has more
-/// than twice as many slots as tracks, so every probe sequence reaches an empty slot).
+/// Index of track @p id in w->tracks, or -1 (track_index.h; the table has more than twice as
+/// many slots as tracks, so every probe sequence reaches an empty slot).
 int32_t find_track(const sfd_window_t &w, int64_t id) {
-    int32_t s = slot_of(id);
-    for (int32_t probe = 0; probe < SFD_WINDOW_INDEX_SLOTS; ++probe) {
-        const int16_t v = w.index[s];
-        if (v < 0) return -1;
-        if (v < w.num_tracks && w.tracks[v].id == id) return v;
-        s = (s + 1 == SFD_WINDOW_INDEX_SLOTS) ? 0 : s + 1;
-    }
-    return -1;
+    const sfd_track_index_t t = sfd_track_index_view_i16(
+        w.index, SFD_WINDOW_INDEX_SLOTS, &w.tracks[0].id, sizeof w.tracks[0], w.num_tracks);
+    return sfd_track_index_find(&t, id);
 }
 
 void index_insert(sfd_window_t *w, int64_t id, int16_t k) {
-    int32_t s = slot_of(id);
-    for (int32_t probe = 0; probe < SFD_WINDOW_INDEX_SLOTS; ++probe) {
-        if (w->index[s] < 0) {
-            w->index[s] = k;
-            return;
-        }
-        s = (s + 1 == SFD_WINDOW_INDEX_SLOTS) ? 0 : s + 1;
-    }
+    const sfd_track_index_t t =
+        sfd_track_index_i16(w->index, SFD_WINDOW_INDEX_SLOTS, nullptr, 0, 0);
+    (void)sfd_track_index_insert(&t, id, k);
 }
 
 /// Removes the tracks with used == 0 and rebuilds the index.
@@ -227,12 +214,9 @@ CamPose cam_pose(const Mat3 &R_ItoW, const Vec3 &p_IinW, const sfd_extrinsics_t 
 
 /// Inverse of a symmetric 2x2 given as (xx, xy, yy); false unless positive definite.
 bool inv2(const double c[3], Mat2 *out) {
-    const double det = c[0] * c[2] - c[1] * c[1];
+    const double det = la::det_2x2(c[0], c[1], c[1], c[2]);
     if (!(c[0] > 0.0) || !(det > 0.0) || !std::isfinite(det)) return false;
-    (*out)(0, 0) = c[2] / det;
-    (*out)(0, 1) = -c[1] / det;
-    (*out)(1, 0) = -c[1] / det;
-    (*out)(1, 1) = c[0] / det;
+    *out = la::inverse_2x2(c[0], c[1], c[1], c[2], det);
     return true;
 }
 
@@ -428,8 +412,9 @@ TrackOutcome process_track(sfd_window_t *w, const sfd_window_track_t &t,
     return TrackOutcome::kUsed;
 }
 
-/// Adds dx to the nominal state (IMU and clones); first estimates stay.
-bool inject(sfd_window_t *w, const double *dx) {
+/// Adds dx to the nominal state (IMU and clones); first estimates stay. (Not inlined: its frame
+/// would add to sfd_window_frame's.)
+__attribute__((noinline)) bool inject(sfd_window_t *w, const double *dx) {
     if (!all_finite(dx, static_cast<std::size_t>(dim(*w)))) return false;
     for (int k = 0; k < 3; ++k) {
         w->p_IinW_m[k] += dx[P_ + k];

@@ -1,0 +1,249 @@
+// SPDX-License-Identifier: MIT
+// OPRF, Kilic 2014 Section 3.2 / Table 1: the hypothesis loop scored by the Sampson distance of
+// eq. (25) in single precision, the noise scale of the chosen hypothesis, the rotation-only
+// transfer under degenerate motion, and the individual-compatibility gate of set 1 and set 2
+// (core/docs/association.md "OPRF", "Noise scale", "Gate").
+#include "association_internal.hpp"
+#include "small_linalg.hpp"
+#include "sfd/sfd_prng.h"
+#include "sfd/sfd_ransac.h"
+
+namespace sfd {
+namespace assoc {
+namespace {
+
+/// Fewest matches for OPRF's noise scale, and the median of chi2(1).
+constexpr int32_t kScaleMinMatches = 16;
+constexpr double kChi2Dof1Median = 0.454936423119572;
+
+/// Single-precision form of eq. (25) in normalized coordinates (see sampson_count_packed()): the
+/// residual e = x~_prev^T E x~_curr and the Sampson denominator weighted per axis,
+/// wx (g0^2 + h0^2) + wy (g1^2 + h1^2) with g = E x~_curr, h = E^T x~_prev.
+inline void sampson_terms_f(const float *E, float u1, float v1, float u2, float v2, float wx,
+                            float wy, float *e, float *den) {
+    const float g0 = E[0] * u2 + E[1] * v2 + E[2];
+    const float g1 = E[3] * u2 + E[4] * v2 + E[5];
+    const float g2 = E[6] * u2 + E[7] * v2 + E[8];
+    const float h0 = E[0] * u1 + E[3] * v1 + E[6];
+    const float h1 = E[1] * u1 + E[4] * v1 + E[7];
+    *e = u1 * g0 + v1 * g1 + g2;
+    *den = wx * (g0 * g0 + h0 * h0) + wy * (g1 * g1 + h1 * h1);
+}
+
+/// Counts the inliers of one OPRF hypothesis among the packed valid matches: the Sampson distance
+/// of eq. (25) in px^2 is at most @p thr_px2. It is evaluated in normalized coordinates x~ = K^-1
+/// x, where F = K^-T E K^-1 gives the same residual e = x~_prev^T E x~_curr and the pixel Sampson
+/// denominator |(F x_curr)_12|^2 + |(F^T x_prev)_12|^2 = (g0^2 + h0^2) / fx^2 + (g1^2 + h1^2) /
+/// fy^2 with g = E x~_curr, h = E^T x~_prev; the test e^2 <= thr (...) needs no division and, E
+/// being scaled to unit largest entry, is well conditioned in single precision. Blocks of
+/// SFD_ASSOC_SCORE_BLOCK matches are scored together (vectorizable; the NaN padding is never an
+/// inlier). Stops early, returning a count below @p need, once even all remaining matches could not
+/// reach @p need: only a hypothesis with more inliers than the best so far matters. Single
+/// precision only ranks the hypotheses: the verdicts of the chosen one are computed in double
+/// precision with sampson_px2().
+int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], float thr_u, float thr_v,
+                             int32_t nv, int32_t need) {
+    constexpr int32_t kBlock = SFD_ASSOC_SCORE_BLOCK;
+    float Ek[9];  // a local copy: provably not aliased by the loop, so it stays in registers
+    for (int k = 0; k < 9; ++k) Ek[k] = E[k];
+    int32_t count = 0;
+    for (int32_t k0 = 0; k0 < nv; k0 += kBlock) {
+        if (count + (nv - k0) < need) return count;
+        const float *u1 = a->nx_prev_u + k0;
+        const float *v1 = a->nx_prev_v + k0;
+        const float *u2 = a->nx_curr_u + k0;
+        const float *v2 = a->nx_curr_v + k0;
+        int32_t block_count = 0;
+        for (int32_t j = 0; j < kBlock; ++j) {
+            float e = 0.0F;
+            float rhs = 0.0F;
+            sampson_terms_f(Ek, u1[j], v1[j], u2[j], v2[j], thr_u, thr_v, &e, &rhs);
+            const int32_t in =
+                static_cast<int32_t>(e * e <= rhs) & static_cast<int32_t>(rhs > 0.0F);
+            block_count += in;
+        }
+        count += block_count;
+    }
+    return count;
+}
+
+/// The Sampson distance of eq. (25) of every packed valid match under @p E, in units of sigma^2
+/// (the same normalized-coordinate form and precision as sampson_count_packed()), into
+/// a.packed_stat; 3e38 where the denominator vanishes or the value is not finite.
+void sampson_stat_packed(sfd_assoc_t *a, const float E[9], float inv_fx2, float inv_fy2,
+                         float inv_sigma2, int32_t nv) {
+    constexpr int32_t kBlock = SFD_ASSOC_SCORE_BLOCK;
+    float Ek[9];
+    for (int k = 0; k < 9; ++k) Ek[k] = E[k];
+    for (int32_t k0 = 0; k0 < nv; k0 += kBlock) {
+        const float *u1 = a->nx_prev_u + k0;
+        const float *v1 = a->nx_prev_v + k0;
+        const float *u2 = a->nx_curr_u + k0;
+        const float *v2 = a->nx_curr_v + k0;
+        float *stat = a->packed_stat + k0;
+        for (int32_t j = 0; j < kBlock; ++j) {
+            float e = 0.0F;
+            float den = 0.0F;
+            sampson_terms_f(Ek, u1[j], v1[j], u2[j], v2[j], inv_fx2, inv_fy2, &e, &den);
+            const float d = (e * e * inv_sigma2) / den;
+            stat[j] = (d <= 3.0e38F) ? d : 3.0e38F;  // den = 0 gives Inf or NaN: 3e38
+        }
+    }
+}
+
+/// nu^T (H P_ss H^T + R)^-1 nu with P_ss = L L^T given by its Cholesky factor (H L computed
+/// once, 2x6 times lower-triangular 6x6); +inf when S is not PD.
+double mahalanobis2(const Linearized &lin, const Mat6 &Lss) {
+    double hl0[6], hl1[6];  // rows of H L (L lower triangular)
+    for (int k = 0; k < 6; ++k) {
+        double s0 = 0.0, s1 = 0.0;
+        for (int j = k; j < 6; ++j) {
+            s0 += lin.H(0, j) * Lss(j, k);
+            s1 += lin.H(1, j) * Lss(j, k);
+        }
+        hl0[k] = s0;
+        hl1[k] = s1;
+    }
+    double s00 = lin.R(0, 0), s11 = lin.R(1, 1), s01 = 0.5 * (lin.R(0, 1) + lin.R(1, 0));
+    for (int k = 0; k < 6; ++k) {
+        s00 += hl0[k] * hl0[k];
+        s11 += hl1[k] * hl1[k];
+        s01 += hl0[k] * hl1[k];
+    }
+    double q = 0.0;
+    if (!la::inv_quadratic_2x2(s00, s01, s01, s11, lin.nu(0), lin.nu(1), &q)) {
+        return std::numeric_limits<double>::infinity();
+    }
+    return q;
+}
+
+/// Expected parallax (px) between the previous camera and the prior current camera: focal length
+/// times the baseline times the mean inverse depth of the valid matches.
+double expected_parallax_px(const sfd_ekf_camera_t &cam, const CameraPose &prev,
+                            const CameraPose &cur, const double *inv_depth_sum, int32_t count) {
+    if (count <= 0) return 0.0;
+    const double baseline = (cur.p_CinW - prev.p_CinW).norm();
+    const double f = 0.5 * (cam.fx_px + cam.fy_px);
+    return f * baseline * (*inv_depth_sum / count);
+}
+
+}  // namespace
+
+/// Cholesky factor of the pose covariance (lower); a tiny diagonal load keeps a PSD-but-singular
+/// P_ss factorizable (the gate then treats that direction as known).
+Mat6 pose_cholesky(const Mat6 &Pss) {
+    Mat6 L = Mat6::Zero();
+    double max_diag = 0.0;
+    for (int i = 0; i < 6; ++i) max_diag = std::fmax(max_diag, Pss(i, i));
+    const double load = 1e-12 * max_diag + 1e-300;
+    for (int j = 0; j < 6; ++j) {
+        double sjj = Pss(j, j) + load;
+        for (int k = 0; k < j; ++k) sjj -= L(j, k) * L(j, k);
+        const double ljj = (sjj > 0.0) ? std::sqrt(sjj) : 0.0;
+        L(j, j) = ljj;
+        for (int i = j + 1; i < 6; ++i) {
+            double t = Pss(i, j);
+            for (int k = 0; k < j; ++k) t -= L(i, k) * L(j, k);
+            L(i, j) = (ljj > 0.0) ? t / ljj : 0.0;
+        }
+    }
+    return L;
+}
+
+/// Individual compatibility (thesis Section 1.2.1.1) of one linearized match under the
+/// filter's pose covariance (Cholesky factor @p Lss): nu^T (H P_ss H^T + R)^-1 nu.
+bool passes_gate(const sfd_assoc_t &a, const Linearized &lin, const Mat6 &Lss, double *d2) {
+    *d2 = mahalanobis2(lin, Lss);
+    return *d2 <= a.chi2_2;
+}
+
+/// Removes from @p set the matches failing the gate at the filter @p ekf (each linearized there);
+/// their statistic becomes the Mahalanobis value. Returns how many were removed.
+int32_t gate_innovations(sfd_assoc_t *a, const sfd_ekf_t &ekf, const sfd_ekf_camera_t &cam,
+                         const sfd_match_t *m, int32_t n, uint8_t *set) {
+    const Mat6 Lss = pose_cholesky(pose_covariance(ekf));
+    const Linearizer lz(ekf, ekf_rotation(ekf), cam);
+    int32_t removed = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        if (set[i] == 0U) continue;
+        Linearized lin;
+        double d2 = std::numeric_limits<double>::infinity();
+        if (!lz.linearize(m[i].obs, &lin) || !passes_gate(*a, lin, Lss, &d2)) {
+            set[i] = 0U;
+            a->best_stat[i] = static_cast<float>(std::fmin(d2, 3.0e38));
+            ++removed;
+        }
+    }
+    return removed;
+}
+
+void oprf_select(sfd_assoc_t *a, const SelectInputs &in, sfd_assoc_result_t *out) {
+    const sfd_assoc_params_t &prm = a->params;
+    a->stage = SFD_STAGE_OPRF;
+    const Vec3 p_prior(in.ekf.p_IinW_m[0], in.ekf.p_IinW_m[1], in.ekf.p_IinW_m[2]);
+    const CameraPose cur_prior = camera_pose(in.R_prior, p_prior, in.cam.ext);
+    if (expected_parallax_px(in.cam, in.prev, cur_prior, &in.inv_depth_sum, in.nv) <
+        prm.min_parallax_px) {
+        // Degenerate motion: the epipolar geometry is undefined; the hypotheses are scored by
+        // the rotation-only transfer instead.
+        a->score_kind = static_cast<int32_t>(Score::kTransfer);
+        out->degenerate_motion = 1;
+        hypothesize_and_test(a, in, Score::kTransfer, out);
+        return;
+    }
+    a->score_kind = static_cast<int32_t>(Score::kSampson);
+    const int32_t nv = in.nv;
+    const Mat6 Pss = pose_covariance(in.ekf);
+    // The Sampson scoring runs over the packed pixel arrays of the valid matches.
+    const double thr_sampson = a->chi2_1 * in.sigma2;
+    const float thr_u = static_cast<float>(thr_sampson * in.inv_fx * in.inv_fx);
+    const float thr_v = static_cast<float>(thr_sampson * in.inv_fy * in.inv_fy);
+    Model best_model{};
+    int32_t best_count = -1;
+    int32_t needed = prm.max_hypotheses;  // line 1: "a big value"
+    int32_t h = 0;
+    for (; h < prm.max_hypotheses && h < needed; ++h) {
+        Mat3 R_h;
+        Vec3 p_h;
+        if (!draw_hypothesis(a, in, Pss, &R_h, &p_h)) {
+            continue;  // a failed hypothesis still counts against the budget
+        }
+        const Model model = make_model(in.cam, in.prev, R_h, p_h, Parts::kEpipolarOnly);
+        const int32_t count = sampson_count_packed(a, model.E, thr_u, thr_v, nv, best_count + 1);
+        if (count > best_count) {  // line 6
+            best_count = count;
+            best_model = model;
+            needed = sfd_ransac_hypothesis_count(
+                prm.confidence, static_cast<double>(count) / static_cast<double>(nv), 1,
+                prm.max_hypotheses);
+        }
+    }
+    if (best_count >= 0) {  // verdicts and statistics of the best hypothesis
+        sampson_stat_packed(a, best_model.E, static_cast<float>(in.inv_fx * in.inv_fx),
+                            static_cast<float>(in.inv_fy * in.inv_fy),
+                            static_cast<float>(1.0 / in.sigma2), nv);
+        // Noise scale (core/docs/association.md "Noise scale"): the hypothesis' pose error
+        // and a pixel_sigma_px that is off both change every distance; the median over the
+        // matches, over the chi2(1) median 0.4549, measures it (robust while at most half
+        // are spurious); kept within [1/25, 25], 1 below 16 matches.
+        if (nv >= kScaleMinMatches) {
+            for (int32_t k = 0; k < nv; ++k) a->cur_stat[k] = a->packed_stat[k];
+            const double s = median_in_place(a->cur_stat, nv) / kChi2Dof1Median;
+            a->sampson_scale = (s < 0.04) ? 0.04 : ((s > 25.0) ? 25.0 : s);
+        }
+        const float inv_scale = static_cast<float>(1.0 / a->sampson_scale);
+        const float chi2_1 = static_cast<float>(a->chi2_1);
+        best_count = 0;
+        for (int32_t k = 0; k < nv; ++k) {
+            const int32_t i = a->valid_idx[k];
+            const float d = a->packed_stat[k] * inv_scale;
+            a->best[i] = (d <= chi2_1) ? 1U : 0U;
+            best_count += a->best[i];
+            a->best_stat[i] = d;
+        }
+    }
+    end_hypotheses(a, in, h, needed, best_count, out);
+}
+
+}  // namespace assoc
+}  // namespace sfd
