@@ -7,7 +7,8 @@
  *                    under a few configuration bytes; after an IMU burst that overflows the
  *                    ring), and prefixes of it;
  * plus hand-made edge inputs in each directory: empty, one byte, the fingerprint alone, truncated
- * messages, another channel's message. Exit 0 ok, 2 bad usage or unreadable log, 1 write error. */
+ * messages, another channel's message; and the fuzzers' dictionaries in OUTDIR/dicts (see
+ * write_dicts). Exit 0 ok, 2 bad usage or unreadable log, 1 write error. */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -136,9 +137,128 @@ static void edges(const char *dir, const char *sub, const event_t *e, const even
     if (other != NULL) write_file(dir, sub, "edge_other_channel", other->data, (size_t)other->size);
 }
 
+/* One libFuzzer dictionary entry: "..." with every byte outside printable ASCII (and " and \)
+ * as \xNN. */
+static void dict_entry(FILE *f, const uint8_t *b, size_t n) {
+    fputc('"', f);
+    for (size_t i = 0; i < n; ++i) {
+        if (b[i] >= 0x20 && b[i] < 0x7f && b[i] != '"' && b[i] != '\\') {
+            fputc(b[i], f);
+        } else {
+            fprintf(f, "\\x%02X", b[i]);
+        }
+    }
+    fputs("\"\n", f);
+}
+
+static void dict_string(FILE *f, const char *s) {
+    dict_entry(f, (const uint8_t *)s, strlen(s));
+}
+
+/* An LCM fingerprint as it starts a message: the 64-bit hash, big-endian. */
+static void dict_hash(FILE *f, int64_t h) {
+    uint8_t b[8];
+    const uint64_t u = (uint64_t)h;
+    for (int k = 0; k < 8; ++k) b[k] = (uint8_t)(u >> (56 - 8 * k));
+    dict_entry(f, b, 8);
+}
+
+static FILE *open_dict(const char *dir, const char *name) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s/dicts/%s", dir, name);
+    FILE *f = fopen(path, "w");
+    if (f == NULL) {
+        fprintf(stderr, "sfd-fuzz-seeds: cannot write %s\n", path);
+        g_failed = 1;
+    }
+    return f;
+}
+
+static void close_dict(FILE *f, const char *name) {
+    if (f != NULL && fclose(f) != 0) {
+        fprintf(stderr, "sfd-fuzz-seeds: cannot write dictionary %s\n", name);
+        g_failed = 1;
+    }
+}
+
+/* The fuzzers' dictionaries (libFuzzer -dict), made from the build's own types and files so they
+ * never go stale: OUTDIR/dicts/wire.dict (every sfd type's fingerprint, the values the decoders
+ * check: camera models, capacities), log_reader.dict (LCM's log sync word, the channel names, the
+ * fingerprints), config.dict (every key of the shipped YAML and the loader's special tokens). */
+static void write_dicts(const char *dir, const char *yaml) {
+    make_dir(dir, "dicts");
+    const int64_t hashes[] = {__sfd_imu_t_get_hash(),          __sfd_camera_info_t_get_hash(),
+                              __sfd_feature_frame_t_get_hash(), __sfd_feature_verdict_t_get_hash(),
+                              __sfd_nav_state_t_get_hash(),     __sfd_timing_t_get_hash(),
+                              __sfd_truth_t_get_hash()};
+    static const char *const channels[] = {"IMU",         "CAMERA_INFO", "FEATURES",
+                                           "SFD_VERDICT", "SFD_TIMING",  "SFD_STATE",
+                                           "TRUTH"};
+    FILE *w = open_dict(dir, "wire.dict");
+    if (w != NULL) {
+        for (size_t k = 0; k < sizeof hashes / sizeof hashes[0]; ++k) dict_hash(w, hashes[k]);
+        const uint8_t small[] = {0, 1, 2, 3, 0xff};
+        for (size_t k = 0; k < sizeof small; ++k) dict_entry(w, &small[k], 1);
+        const uint8_t cap512[4] = {0, 0, 2, 0}, cap513[4] = {0, 0, 2, 1}, neg1[4] = {0xff, 0xff,
+                                                                                    0xff, 0xff};
+        dict_entry(w, cap512, 4);
+        dict_entry(w, cap513, 4);
+        dict_entry(w, neg1, 4);
+        const uint8_t nan_be[8] = {0x7f, 0xf8, 0, 0, 0, 0, 0, 0};
+        const uint8_t inf_be[8] = {0x7f, 0xf0, 0, 0, 0, 0, 0, 0};
+        const uint8_t max_be[8] = {0x7f, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff};
+        dict_entry(w, nan_be, 8);
+        dict_entry(w, inf_be, 8);
+        dict_entry(w, max_be, 8);
+    }
+    close_dict(w, "wire.dict");
+    FILE *l = open_dict(dir, "log_reader.dict");
+    if (l != NULL) {
+        const uint8_t sync[4] = {0xED, 0xA1, 0xDA, 0x01};
+        dict_entry(l, sync, 4);
+        for (size_t k = 0; k < sizeof channels / sizeof channels[0]; ++k) {
+            dict_string(l, channels[k]);
+        }
+        for (size_t k = 0; k < sizeof hashes / sizeof hashes[0]; ++k) dict_hash(l, hashes[k]);
+        const uint8_t big_len[4] = {0x7f, 0xff, 0xff, 0xff};
+        dict_entry(l, big_len, 4);
+    }
+    close_dict(l, "log_reader.dict");
+    FILE *c = open_dict(dir, "config.dict");
+    FILE *y = fopen(yaml, "r");
+    if (c != NULL) {
+        static const char *const tokens[] = {"%YAML:1.0", "---", ": ", ".nan", ".inf", "-.inf",
+                                             "[ ", " ]", ", ", "\"", "\n   ", "\\n", "1e309",
+                                             "2147483648", "0x", "00", "-1", "#"};
+        for (size_t k = 0; k < sizeof tokens / sizeof tokens[0]; ++k) dict_string(c, tokens[k]);
+        char line[1024];
+        int keys = 0;
+        while (y != NULL && fgets(line, sizeof line, y) != NULL) {
+            const char *p = line;
+            while (*p == ' ') ++p;
+            size_t n = 0;
+            while ((p[n] >= 'a' && p[n] <= 'z') || (p[n] >= '0' && p[n] <= '9') || p[n] == '_') {
+                ++n;
+            }
+            if (n == 0 || p[n] != ':') continue;
+            char key[128];
+            snprintf(key, sizeof key, "%.*s:", (int)(n < 100 ? n : 100), p);
+            dict_string(c, key);
+            ++keys;
+        }
+        if (keys == 0) {
+            fprintf(stderr, "sfd-fuzz-seeds: no key read from %s\n", yaml);
+            g_failed = 1;
+        }
+    }
+    if (y != NULL) fclose(y);
+    close_dict(c, "config.dict");
+}
+
 int main(int argc, char **argv) {
-    if (argc != 3 || !strcmp(argv[1], "--help")) {
-        fprintf(argc == 2 ? stdout : stderr, "usage: sfd-fuzz-seeds LOG.lcmlog OUTDIR\n");
+    if (argc != 4 || !strcmp(argv[1], "--help")) {
+        fprintf(argc == 2 ? stdout : stderr,
+                "usage: sfd-fuzz-seeds LOG.lcmlog OUTDIR CONFIG.yaml\n");
         return argc == 2 ? 0 : 2;
     }
     const char *dir = argv[2];
@@ -215,6 +335,7 @@ int main(int argc, char **argv) {
                  (size_t)first[FZ_SEQ_CAMERA_INFO]->size / 2);
     write_file(dir, "sequence", "edge_wrong_channels", g_seq, len);
 
+    write_dicts(dir, argv[3]);
     for (int i = 0; i < g_num_events; ++i) free(g_events[i].data);
     printf("sfd-fuzz-seeds: %d IMU, %d CAMERA_INFO, %d FEATURES events from %s into %s\n",
            per_kind[0], per_kind[1], per_kind[2], argv[1], dir);

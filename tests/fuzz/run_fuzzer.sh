@@ -3,9 +3,14 @@
 # CTest fuzz.<target>: fuzzes a fresh copy of the seed corpus for a bounded time with a fixed
 # seed; fails on any crash, sanitizer report, violated invariant (abort), leak, timeout (a single
 # input over 10 s: the flight code must run in bounded time) or RSS over 2 GiB.
-# Usage: run_fuzzer.sh FUZZER SEEDS_DIR WORK_DIR SECONDS MAX_LEN
+# Usage: run_fuzzer.sh FUZZER SEEDS_DIR WORK_DIR SECONDS MAX_LEN [DICT] (libFuzzer -dict)
 set -euo pipefail
-fuzzer="$1"; seeds="$2"; work="$3"; seconds="$4"; max_len="$5"
+fuzzer="$1"; seeds="$2"; work="$3"; seconds="$4"; max_len="$5"; dict="${6:-}"
+dict_opt=()
+if [ -n "$dict" ]; then
+  if [ ! -s "$dict" ]; then echo "no dictionary at $dict (build the fuzz preset first)"; exit 1; fi
+  dict_opt=(-dict="$dict")
+fi
 if [ ! -d "$seeds" ]; then echo "no seed corpus at $seeds (build the fuzz preset first)"; exit 1; fi
 rm -rf "$work"
 mkdir -p "$work/corpus" "$work/artifacts"
@@ -13,6 +18,7 @@ cp "$seeds"/* "$work/corpus/"
 cd "$work"
 set +e
 "$fuzzer" -seed=1 -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -max_len="$max_len" \
+  "${dict_opt[@]}" \
   -print_final_stats=1 -artifact_prefix="$work/artifacts/" corpus > fuzz.log 2>&1
 rc=$?
 set -e
