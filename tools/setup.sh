@@ -13,7 +13,8 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 # Debian packages (SPEC "Dependencies") plus the analysis tools CI runs (clang-14 with its
 # sanitizer and libFuzzer runtimes, libclang-rt-14-dev, for the `fuzz` preset).
 # liblcm-java, libjchart2d-java and a JDK: the Java types jar and sfd-spy (lcm-spy needs jchart2d,
-# which Debian's liblcm-java does not pull in).
+# which Debian's liblcm-java does not pull in). qemu-system-arm: the cortex-m7 preset runs the
+# core unit tests on its mps2-an500 board (Cortex-M7; docs/embedded.md).
 APT_PKGS=(
   build-essential cmake ninja-build pkg-config ccache
   libeigen3-dev
@@ -22,7 +23,7 @@ APT_PKGS=(
   libopencv-dev
   libcmocka-dev
   nlohmann-json3-dev
-  gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib binutils-arm-none-eabi
+  gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib binutils-arm-none-eabi qemu-system-arm
   g++-aarch64-linux-gnu qemu-user
   clang-format cppcheck clang-tidy
   clang-14 libclang-rt-14-dev

@@ -4,7 +4,8 @@
 #   host       Release: unit tests, proofs (symbols, interposer, stack, sizes), lint
 #   host-asan  Debug with AddressSanitizer + UndefinedBehaviorSanitizer
 #   cortex-m7  core cross-built for arm-none-eabi (hard float): symbol, stack and size proofs; the
-#              firmware example's image and its text/data/bss, state and stack budgets
+#              firmware example's image and its text/data/bss, state and stack budgets; the core
+#              unit tests on QEMU's mps2-an500 Cortex-M7 (m7.unit.*, docs/embedded.md)
 #   aarch64    core, LCM driver, sfd-node/replay/sim cross-built against the arm64 sysroot
 #              (tools/setup.sh); unit tests, proofs and the golden replay under qemu-aarch64
 #   fuzz       clang-14 libFuzzer targets (ASan + UBSan), 20 s each from sfd-sim seeds (fuzz.*)

@@ -77,7 +77,7 @@ static void parity_basis_orthonormal_and_annihilates_otilde(void **state) {
         parity_truth_t tr;
         sim_geometry(&rng, &g, &tr, L, n, known, 0.05, axis_only);
         sim_measure(&rng, &g, &tr, kSigma, 0.0, NULL, 0);
-        int dim = -1;
+        int32_t dim = -1;
         assert_status(sfd_parity_group_basis(&g, B, RMAX * RMAX, &dim), SFD_OK);
         const int rows = 2 * n * L;
         const int rank_o = axis_only ? 2 : 3;
