@@ -187,20 +187,19 @@ static void close_dict(FILE *f, const char *name) {
  * fingerprints), config.dict (every key of the shipped YAML and the loader's special tokens). */
 static void write_dicts(const char *dir, const char *yaml) {
     make_dir(dir, "dicts");
-    const int64_t hashes[] = {__sfd_imu_t_get_hash(),          __sfd_camera_info_t_get_hash(),
+    const int64_t hashes[] = {__sfd_imu_t_get_hash(),           __sfd_camera_info_t_get_hash(),
                               __sfd_feature_frame_t_get_hash(), __sfd_feature_verdict_t_get_hash(),
                               __sfd_nav_state_t_get_hash(),     __sfd_timing_t_get_hash(),
                               __sfd_truth_t_get_hash()};
-    static const char *const channels[] = {"IMU",         "CAMERA_INFO", "FEATURES",
-                                           "SFD_VERDICT", "SFD_TIMING",  "SFD_STATE",
-                                           "TRUTH"};
+    static const char *const channels[] = {"IMU",        "CAMERA_INFO", "FEATURES", "SFD_VERDICT",
+                                           "SFD_TIMING", "SFD_STATE",   "TRUTH"};
     FILE *w = open_dict(dir, "wire.dict");
     if (w != NULL) {
         for (size_t k = 0; k < sizeof hashes / sizeof hashes[0]; ++k) dict_hash(w, hashes[k]);
         const uint8_t small[] = {0, 1, 2, 3, 0xff};
         for (size_t k = 0; k < sizeof small; ++k) dict_entry(w, &small[k], 1);
-        const uint8_t cap512[4] = {0, 0, 2, 0}, cap513[4] = {0, 0, 2, 1}, neg1[4] = {0xff, 0xff,
-                                                                                    0xff, 0xff};
+        const uint8_t cap512[4] = {0, 0, 2, 0}, cap513[4] = {0, 0, 2, 1},
+                      neg1[4] = {0xff, 0xff, 0xff, 0xff};
         dict_entry(w, cap512, 4);
         dict_entry(w, cap513, 4);
         dict_entry(w, neg1, 4);
@@ -227,9 +226,9 @@ static void write_dicts(const char *dir, const char *yaml) {
     FILE *c = open_dict(dir, "config.dict");
     FILE *y = fopen(yaml, "r");
     if (c != NULL) {
-        static const char *const tokens[] = {"%YAML:1.0", "---", ": ", ".nan", ".inf", "-.inf",
-                                             "[ ", " ]", ", ", "\"", "\n   ", "\\n", "1e309",
-                                             "2147483648", "0x", "00", "-1", "#"};
+        static const char *const tokens[] = {
+            "%YAML:1.0", "---",   ": ",  ".nan",  ".inf",       "-.inf", "[ ", " ]", ", ",
+            "\"",        "\n   ", "\\n", "1e309", "2147483648", "0x",    "00", "-1", "#"};
         for (size_t k = 0; k < sizeof tokens / sizeof tokens[0]; ++k) dict_string(c, tokens[k]);
         char line[1024];
         int keys = 0;
