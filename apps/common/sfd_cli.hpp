@@ -82,6 +82,24 @@ std::string version_string();
 bool parse_int(const std::string &text, long long lo, long long hi, long long *out,
                std::string *why);
 bool parse_real(const std::string &text, double lo, double hi, double *out, std::string *why);
+
+/// A Setter that parses an integer in [lo, hi] (parse_int) into *dst, of any integer type.
+template <typename Int>
+Setter int_setter(Int *dst, long long lo, long long hi) {
+    return [dst, lo, hi](const std::string &v, std::string *why) {
+        long long x = 0;
+        if (!parse_int(v, lo, hi, &x, why)) return false;
+        *dst = static_cast<Int>(x);
+        return true;
+    };
+}
+
+/// A Setter that parses a finite real in [lo, hi] (parse_real) into *dst.
+inline Setter real_setter(double *dst, double lo, double hi) {
+    return [dst, lo, hi](const std::string &v, std::string *why) {
+        return parse_real(v, lo, hi, dst, why);
+    };
+}
 /// "X,Y,Z": three finite numbers.
 bool parse_vec3(const std::string &text, double out[3], std::string *why);
 

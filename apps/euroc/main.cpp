@@ -204,19 +204,6 @@ int main(int argc, char **argv) {
             return true;
         };
     };
-    const auto int_opt = [](auto *dst, long long lo, long long hi) -> sfdcli::Setter {
-        return [dst, lo, hi](const std::string &v, std::string *why) {
-            long long x = 0;
-            if (!sfdcli::parse_int(v, lo, hi, &x, why)) return false;
-            *dst = static_cast<std::remove_pointer_t<decltype(dst)>>(x);
-            return true;
-        };
-    };
-    const auto real_opt = [](double *dst, double lo, double hi) -> sfdcli::Setter {
-        return [dst, lo, hi](const std::string &v, std::string *why) {
-            return sfdcli::parse_real(v, lo, hi, dst, why);
-        };
-    };
     cli.section("Input and output");
     cli.value("euroc", "DIR",
               "standard layout: DIR/mav0 (or DIR = mav0) with imu0/data.csv,\n"
@@ -248,31 +235,31 @@ int main(int argc, char **argv) {
     output.set = text_opt(&out_path);
     cli.add(output);
     cli.value("max-frames", "N", "convert the first N frames only (default: all)",
-              int_opt(&max_frames, 1, 100000000));
+              sfdcli::int_setter(&max_frames, 1, 100000000));
     cli.value("imu-before-s", "S",
               "IMU kept from S seconds before the first frame (default 1.0)\n"
               "to the last frame; the count of samples left out is printed",
-              real_opt(&imu_before_s, 0.0, 1e6));
+              sfdcli::real_setter(&imu_before_s, 0.0, 1e6));
     cli.value("camera-id", "ID", "camera_id of CAMERA_INFO and FEATURES (default 0)",
-              int_opt(&camera_id, 0, 2147483647));
+              sfdcli::int_setter(&camera_id, 0, 2147483647));
     cli.section("Tracker (drivers/opencv/sfd_feature_tracker.hpp)");
     cli.value("max-features", "N",
               "tracks per frame, 1.." + std::to_string(sfd::kTrackerMaxFeatures) + " (default 150)",
-              int_opt(&tc.max_features, 1, sfd::kTrackerMaxFeatures));
+              sfdcli::int_setter(&tc.max_features, 1, sfd::kTrackerMaxFeatures));
     cli.value("min-distance-px", "PX", "spacing between tracks (default 20)",
-              real_opt(&tc.min_distance_px, 0.0, 1000.0));
+              sfdcli::real_setter(&tc.min_distance_px, 0.0, 1000.0));
     cli.flag("no-fb-check", "plain pyramidal LK, no forward-backward check",
              [&tc] { tc.fb_check = false; });
     cli.value("fb-threshold-px", "PX", "forward-backward round-trip limit (default 1.0)",
-              real_opt(&tc.fb_threshold_px, 1e-6, 1000.0));
+              sfdcli::real_setter(&tc.fb_threshold_px, 1e-6, 1000.0));
     cli.value("quality-level", "Q", "Shi-Tomasi quality level (default 0.01)",
-              real_opt(&tc.quality_level, 1e-9, 0.999999));
+              sfdcli::real_setter(&tc.quality_level, 1e-9, 0.999999));
     cli.value("lk-window-px", "W", "LK window side, odd (default 21)",
-              int_opt(&tc.lk_window_px, 5, 101));
+              sfdcli::int_setter(&tc.lk_window_px, 5, 101));
     cli.value("lk-levels", "L", "LK pyramid levels (default 3)",
-              int_opt(&tc.lk_pyramid_levels, 0, 8));
+              sfdcli::int_setter(&tc.lk_pyramid_levels, 0, 8));
     cli.value("border-px", "PX", "image border without features (default 8)",
-              int_opt(&tc.border_px, 0, 1000));
+              sfdcli::int_setter(&tc.border_px, 0, 1000));
     cli.epilog(
         "Exit: 0 ok, 2 bad usage or bad/missing input (the message names file and line),\n"
         "1 write failure.");

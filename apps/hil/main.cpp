@@ -503,19 +503,6 @@ int run(int argc, char **argv) {
         "  receives SFD_VERDICT and SFD_TIMING, and reports latency, jitter, deadline misses\n"
         "  and lost messages (docs/hil.md). On a terminal (and CI unset), a progress line on\n"
         "  stderr.");
-    const auto long_opt = [](long *dst, long long lo, long long hi) -> sfdcli::Setter {
-        return [dst, lo, hi](const std::string &v, std::string *why) {
-            long long x = 0;
-            if (!sfdcli::parse_int(v, lo, hi, &x, why)) return false;
-            *dst = static_cast<long>(x);
-            return true;
-        };
-    };
-    const auto real_opt = [](double *dst, double lo, double hi) -> sfdcli::Setter {
-        return [dst, lo, hi](const std::string &v, std::string *why) {
-            return sfdcli::parse_real(v, lo, hi, dst, why);
-        };
-    };
     const auto text_opt = [](std::string *dst) -> sfdcli::Setter {
         return [dst](const std::string &v, std::string *) {
             *dst = v;
@@ -530,14 +517,15 @@ int run(int argc, char **argv) {
               "a simulated flight generated on the fly: paper-uav, mistracking,\n"
               "moving-object, worst-case (sfd-sim --help)",
               text_opt(&opt.sim));
-    cli.value("frames", "N", "--sim: camera frames at 20 Hz (400)", long_opt(&frames, 1, 1000000));
+    cli.value("frames", "N", "--sim: camera frames at 20 Hz (400)",
+              sfdcli::int_setter(&frames, 1, 1000000));
     cli.value(
         "features", "N",
         "--sim: features per frame (200; worst-case " + std::to_string(SFD_MAX_FEATURES) + ")",
-        long_opt(&features, 1, SFD_MAX_FEATURES));
-    cli.value("seed", "N", "--sim: seed (1)", long_opt(&seed, 0, 2147483647LL));
+        sfdcli::int_setter(&features, 1, SFD_MAX_FEATURES));
+    cli.value("seed", "N", "--sim: seed (1)", sfdcli::int_setter(&seed, 0, 2147483647LL));
     cli.value("random-fraction", "F", "--sim worst-case: features replaced by random pixels (1.0)",
-              real_opt(&opt.random_fraction, 0.0, 1.0));
+              sfdcli::real_setter(&opt.random_fraction, 0.0, 1.0));
     cli.section("Node and pacing");
     cli.value("config", "F", "YAML configuration of the node (channels.*, lcm_url)",
               text_opt(&config_path));
@@ -547,9 +535,9 @@ int run(int argc, char **argv) {
     cli.value("rate", "R",
               "pace: R x the recorded pace (1.0); 0 = closed loop, each frame\n"
               "published as soon as the previous verdict arrived or timed out",
-              real_opt(&opt.rate, 0.0, 1000.0));
+              sfdcli::real_setter(&opt.rate, 0.0, 1000.0));
     cli.value("budget-us", "N", "deadline per frame in us (none by default)",
-              long_opt(&opt.budget_us, 1, 100000000));
+              sfdcli::int_setter(&opt.budget_us, 1, 100000000));
     cli.value("budget-of", "W",
               "node: SFD_TIMING total_us (default); processing: total_us -\n"
               "publish_us (the node without its sends); e2e: end-to-end",
@@ -565,9 +553,9 @@ int run(int argc, char **argv) {
               });
     cli.value("timeout-ms", "N",
               "a frame without verdict this long after its publish is lost (1000)",
-              long_opt(&opt.timeout_ms, 1, 600000));
+              sfdcli::int_setter(&opt.timeout_ms, 1, 600000));
     cli.value("warmup", "N", "first N frames left out of the latency figures (10)",
-              long_opt(&opt.warmup, 0, 10000000));
+              sfdcli::int_setter(&opt.warmup, 0, 10000000));
     cli.flag("no-restamp",
              "publish the recorded utimes (default: shifted so that the first\n"
              "message is at the wall-clock time now, so a running node accepts\n"
@@ -585,11 +573,11 @@ int run(int argc, char **argv) {
               text_opt(&opt.json));
     cli.section("Fault injection (docs/hil.md; frame indexes count the source's frames from 0)");
     cli.value("fault-drop", "P", "drop a frame with probability P (in --fault-frames)",
-              real_opt(&opt.faults.drop, 0.0, 1.0));
+              sfdcli::real_setter(&opt.faults.drop, 0.0, 1.0));
     cli.value("fault-dup", "P", "publish a frame twice with probability P",
-              real_opt(&opt.faults.dup, 0.0, 1.0));
+              sfdcli::real_setter(&opt.faults.dup, 0.0, 1.0));
     cli.value("fault-reorder", "P", "publish a frame after the next one with probability P",
-              real_opt(&opt.faults.reorder, 0.0, 1.0));
+              sfdcli::real_setter(&opt.faults.reorder, 0.0, 1.0));
     cli.value("fault-frames", "A:B", "the frames the three above apply to (all)",
               [&opt](const std::string &r, std::string *why) {
                   const size_t c = r.find(':');
@@ -605,18 +593,19 @@ int run(int argc, char **argv) {
                   return true;
               });
     cli.value("fault-future-frame", "N", "stamp frame N 1000 s in the future",
-              long_opt(&opt.faults.future_frame, 0, 100000000));
+              sfdcli::int_setter(&opt.faults.future_frame, 0, 100000000));
     cli.value("fault-restart-frame", "N",
               "from frame N on, stamp every message 100 s earlier (a\n"
               "restarted publisher; the node's first N - 1 are refused)",
-              long_opt(&opt.faults.restart_frame, 0, 100000000));
+              sfdcli::int_setter(&opt.faults.restart_frame, 0, 100000000));
     cli.value("fault-stall-frame", "N",
               "stop publishing --fault-stall-ms before frame N, then go\n"
               "on at the pace from there (every message late, none lost)",
-              long_opt(&opt.faults.stall_frame, 0, 100000000));
-    cli.value("fault-stall-ms", "MS", "(1000)", long_opt(&opt.faults.stall_ms, 1, 600000));
+              sfdcli::int_setter(&opt.faults.stall_frame, 0, 100000000));
+    cli.value("fault-stall-ms", "MS", "(1000)",
+              sfdcli::int_setter(&opt.faults.stall_ms, 1, 600000));
     cli.value("fault-seed", "N", "seed of the fault draws (1)",
-              long_opt(&fault_seed, 0, 2147483647LL));
+              sfdcli::int_setter(&fault_seed, 0, 2147483647LL));
     cli.epilog(
         "SIGINT/SIGTERM: stop publishing, wait up to --timeout-ms for outstanding verdicts (a\n"
         "second signal: at once), report what was measured.\n"

@@ -357,19 +357,6 @@ int main(int argc, char **argv) {
         if (!std::strcmp(name, "output")) o.short_name = 'o';
         cli.add(o);
     };
-    const auto int_opt = [](int *dst, long long lo, long long hi) -> sfdcli::Setter {
-        return [dst, lo, hi](const std::string &v, std::string *why) {
-            long long x = 0;
-            if (!sfdcli::parse_int(v, lo, hi, &x, why)) return false;
-            *dst = static_cast<int>(x);
-            return true;
-        };
-    };
-    const auto real_opt = [](double *dst, double lo, double hi) -> sfdcli::Setter {
-        return [dst, lo, hi](const std::string &v, std::string *why) {
-            return sfdcli::parse_real(v, lo, hi, dst, why);
-        };
-    };
     std::list<std::string> texts;  // the values the const char * options point to
     const auto text_opt = [&texts](const char **dst) -> sfdcli::Setter {
         return [&texts, dst](const std::string &v, std::string *) {
@@ -394,17 +381,17 @@ int main(int argc, char **argv) {
     add("frames", "N", "log isolation uav-imu thesis-loop",
         "frames at 20 Hz: flight logs 400 (the rest included); isolation /\n"
         "uav-imu 200; thesis-loop: per run (800 = one 40 s loop; --quick 200)",
-        int_opt(&opt.frames, 1, 100000));
+        sfdcli::int_setter(&opt.frames, 1, 100000));
     add("features", "N", "log euroc-semireal isolation uav-imu",
         "features (tracks) per frame: flight logs 200 (worst-case " + max_f +
             "),\neuroc-semireal 200, isolation 240, uav-imu 200; max " + max_f,
-        int_opt(&opt.features, 1, SFD_MAX_FEATURES));
+        sfdcli::int_setter(&opt.features, 1, SFD_MAX_FEATURES));
     add("windows", "N", "paper-uav", "paper-uav summary: Monte Carlo windows per case (10000)",
-        int_opt(&opt.windows, 10, 10000000));
+        sfdcli::int_setter(&opt.windows, 10, 10000000));
     add("window-frames", "L", "paper-uav", "paper-uav summary: window length (2, the paper's)",
-        int_opt(&opt.window_frames, 2, SFD_MAX_WINDOW));
+        sfdcli::int_setter(&opt.window_frames, 2, SFD_MAX_WINDOW));
     add("group-size", "n", "paper-uav", "paper-uav summary: group size (3)",
-        int_opt(&opt.group_size, 1, SFD_MAX_GROUP));
+        sfdcli::int_setter(&opt.group_size, 1, SFD_MAX_GROUP));
     add("false-alarm-rate", "A", "uav-imu",
         "uav-imu: false-alarm rate of the printed thresholds (0.01)",
         [&opt](const std::string &v, std::string *why) {
@@ -416,7 +403,7 @@ int main(int argc, char **argv) {
             return true;
         });
     add("runs", "N", "thesis-loop", "thesis-loop: Monte Carlo runs per sweep point (5; --quick 2)",
-        int_opt(&opt.runs, 1, 10000));
+        sfdcli::int_setter(&opt.runs, 1, 10000));
     {
         sfdcli::Option q;
         q.name = "quick";
@@ -431,14 +418,15 @@ int main(int argc, char **argv) {
     add("outlier-ratio", "R", "log isolation",
         "target fraction of spurious observations (0.1); paper-uav log: a\n"
         "fraction R / (W - 1) of the tracks get the fault each frame",
-        real_opt(&opt.outlier_ratio, 0.0, 1.0));
+        sfdcli::real_setter(&opt.outlier_ratio, 0.0, 1.0));
     add("jump-px", "P", "isolation euroc-semireal",
-        "mistrack jump (8 px; flight logs draw 5-30 px)", real_opt(&opt.jump_px, 0.0, 1000.0));
+        "mistrack jump (8 px; flight logs draw 5-30 px)",
+        sfdcli::real_setter(&opt.jump_px, 0.0, 1000.0));
     add("csv-dir", "DIR", "paper-uav isolation thesis-loop",
         "write the scenario's CSV files into DIR (created if missing)", text_opt(&opt.csv_dir));
     add("fault-magnitude", "K", "paper-uav",
         "paper-uav log: k of k(-1,1) in normalized units (0.02)",
-        real_opt(&opt.fault_magnitude, 0.0, 1e4));
+        sfdcli::real_setter(&opt.fault_magnitude, 0.0, 1e4));
     add("depth-var-m2", "V", "log euroc-semireal",
         "depth prior variance written with the features (m^2; flight\nlogs 0, euroc-semireal 0.01)",
         [&opt](const std::string &v, std::string *why) {
@@ -457,24 +445,24 @@ int main(int argc, char **argv) {
         "frames a step (jump, drift step, mismatch and its return) labels\n"
         "the track spurious, from the step: the windows that mix both sides\n"
         "of it, L - 1 (2); moving points: every frame",
-        int_opt(&opt.truth_window, 1, 100));
+        sfdcli::int_setter(&opt.truth_window, 1, 100));
     add("rest-s", "T", "log", "seconds at rest at the start (2.0; 0: start in motion, no ramp)",
-        real_opt(&opt.rest_s, 0.0, 3600.0));
+        sfdcli::real_setter(&opt.rest_s, 0.0, 3600.0));
     add("ramp-s", "T", "log", "seconds of the C2 ramp from rest into the trajectory (3.0)",
-        real_opt(&opt.ramp_s, 0.1, 600.0));
+        sfdcli::real_setter(&opt.ramp_s, 0.1, 600.0));
     add("gyro-noise-rad-s-rthz", "D", "log",
         "gyro white noise density (3.4e-4 rad/s/sqrt(Hz)); the IMU model's\n"
         "four densities are those of the filter.* keys of apps/config/sfd.yaml\n"
         "(per 5 ms sample: sigma = D / sqrt(dt), bias += D_rw sqrt(dt) N(0, 1))",
-        real_opt(&opt.gyro_noise, 0.0, 1.0));
+        sfdcli::real_setter(&opt.gyro_noise, 0.0, 1.0));
     add("accel-noise-m-s2-rthz", "D", "log",
         "accelerometer white noise density (4.0e-3 m/s^2/sqrt(Hz))",
-        real_opt(&opt.accel_noise, 0.0, 10.0));
+        sfdcli::real_setter(&opt.accel_noise, 0.0, 10.0));
     add("gyro-bias-rw-rad-s2-rthz", "D", "log", "gyro bias random walk (3.9e-5 rad/s^2/sqrt(Hz))",
-        real_opt(&opt.gyro_bias_rw, 0.0, 1.0));
+        sfdcli::real_setter(&opt.gyro_bias_rw, 0.0, 1.0));
     add("accel-bias-rw-m-s3-rthz", "D", "log",
         "accelerometer bias random walk (6.0e-3 m/s^3/sqrt(Hz))",
-        real_opt(&opt.accel_bias_rw, 0.0, 10.0));
+        sfdcli::real_setter(&opt.accel_bias_rw, 0.0, 10.0));
     const auto bias_opt = [&opt](bool gyro) -> sfdcli::Setter {
         return [&opt, gyro](const std::string &v, std::string *why) {
             const double lim = gyro ? 1.0 : 10.0;
@@ -499,21 +487,21 @@ int main(int argc, char **argv) {
         "initial accelerometer bias (m/s^2; default drawn, N(0, 0.02^2))", bias_opt(false));
     add("random-fraction", "F", "worst-case",
         "worst-case: fraction of features replaced by random pixels every\nframe, 0..1 (1.0)",
-        real_opt(&opt.random_fraction, 0.0, 1.0));
+        sfdcli::real_setter(&opt.random_fraction, 0.0, 1.0));
     add("euroc", "DIR", "euroc-semireal",
         "euroc-semireal: folder with mav0/ (imu0, state_groundtruth_estimate0,\ncam0)",
         text_opt(&opt.euroc_dir));
     add("camera-hz", "F", "euroc-semireal", "euroc-semireal: camera rate (20 Hz)",
-        real_opt(&opt.camera_hz, 0.1, 200.0));
+        sfdcli::real_setter(&opt.camera_hz, 0.1, 200.0));
     add("spurious-fraction", "R", "euroc-semireal",
         "euroc-semireal: target fraction of spurious features, a third per\nkind (0.1)",
-        real_opt(&opt.spurious_fraction, 0.0, 0.9));
+        sfdcli::real_setter(&opt.spurious_fraction, 0.0, 0.9));
     add("track-loss", "P", "euroc-semireal",
         "euroc-semireal: probability per frame that a track ends (0.02)",
-        real_opt(&opt.track_loss, 0.0, 1.0));
+        sfdcli::real_setter(&opt.track_loss, 0.0, 1.0));
     add("mover-speed-m-s", "V", "euroc-semireal",
         "euroc-semireal: speed of the moving group (0.5 m/s)",
-        real_opt(&opt.mover_speed, 0.0, 100.0));
+        sfdcli::real_setter(&opt.mover_speed, 0.0, 100.0));
     add("config-out", "F", "euroc-semireal",
         "euroc-semireal: also write an sfd-replay configuration for the log:\n"
         "filter.init_from_truth 1, the ground truth's gyro and accelerometer\n"
