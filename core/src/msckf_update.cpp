@@ -174,6 +174,49 @@ extern "C" sfd_status_t sfd_msckf_track_gate(const sfd_msckf_track_t *t, const d
     return SFD_OK;
 }
 
+extern "C" sfd_status_t sfd_msckf_track_statistic(sfd_msckf_track_t *t, double *gamma,
+                                                  int32_t *dof) {
+    if (t == nullptr || gamma == nullptr || dof == nullptr || t->projected != 0 || t->rows < 4 ||
+        t->rows > kRows) {
+        return SFD_ERR_INVAL;
+    }
+    const int rows = t->rows;
+    // S = L L^T in place of R; w = L^-1 r in place of r; G = L^-1 H_f in place of H_f.
+    if (!la::cholesky(t->R, rows, t->R)) return SFD_ERR_NUMERIC;
+    la::forward_solve(t->R, rows, t->r, t->r);
+    double g[kRows];
+    for (int c = 0; c < 3; ++c) {
+        for (int i = 0; i < rows; ++i) g[i] = t->Hf[i][c];
+        la::forward_solve(t->R, rows, g, g);
+        for (int i = 0; i < rows; ++i) t->Hf[i][c] = g[i];
+    }
+    double A[3][3];  // G^T G
+    double b[3];     // G^T w
+    for (int c = 0; c < 3; ++c) {
+        double v = 0.0;
+        for (int i = 0; i < rows; ++i) v += t->Hf[i][c] * t->r[i];
+        b[c] = v;
+        for (int d = 0; d <= c; ++d) {
+            double a = 0.0;
+            for (int i = 0; i < rows; ++i) a += t->Hf[i][c] * t->Hf[i][d];
+            A[c][d] = a;
+            A[d][c] = a;
+        }
+    }
+    double M[3][3];
+    // A is formed from squares: a rank deficiency shows only above rounding (eps ~ 1e-16).
+    if (!la::cholesky(A, la::Dim<3>{}, M, 1e-14)) return SFD_ERR_NUMERIC;
+    double c3[3];
+    la::forward_solve(M, la::Dim<3>{}, b, c3);
+    double ww = 0.0;
+    for (int i = 0; i < rows; ++i) ww += t->r[i] * t->r[i];
+    const double g_stat = ww - (c3[0] * c3[0] + c3[1] * c3[1] + c3[2] * c3[2]);
+    if (!std::isfinite(g_stat)) return SFD_ERR_NUMERIC;
+    *gamma = std::fmax(g_stat, 0.0);  // a perfect fit can round to -eps
+    *dof = rows - 3;
+    return SFD_OK;
+}
+
 extern "C" sfd_status_t sfd_msckf_stack_reset(sfd_msckf_stack_t *s, int32_t n) {
     if (s == nullptr || n < 1 || n > kDim) return SFD_ERR_INVAL;
     s->n = n;

@@ -236,20 +236,23 @@ Eigen::Matrix<double, 2, 3, Eigen::RowMajor> proj_jacobian(const Vec3 &pc) {
 /// within [min_depth_m, max_depth_m] in front of every clone.
 /// The depth prior is that of observation @p depth_k (the window's tracks: 0, the first; the
 /// detection test, sfd_window_test_track: the newest).
+/// x = H^-1 g for a symmetric positive definite 3x3 H by Cholesky (la::cholesky's pivot test,
+/// 1e-13 of the largest diagonal entry); false when H is not.
+bool spd_solve3(const Mat3 &H, const Vec3 &g, Vec3 *x) {
+    double A[3][3];
+    double L[3][3];
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) A[i][j] = H(i, j);
+    }
+    if (!la::cholesky(A, la::Dim<3>{}, L)) return false;
+    double y[3];
+    la::chol_solve(L, la::Dim<3>{}, g.data(), y);
+    *x = Vec3(y[0], y[1], y[2]);
+    return true;
+}
+
 bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPose *pose,
                  bool depth_row, int depth_k, Vec3 *p_out) {
-    Mat3 A = Mat3::Zero();
-    Vec3 b = Vec3::Zero();
-    for (int k = 0; k < t.used; ++k) {
-        const Vec3 ray = pose[k].R_WtoC.transpose() * Vec3(t.xn[k][0], t.xn[k][1], 1.0);
-        const Vec3 u = ray.normalized();
-        const Mat3 M = Mat3::Identity() - u * u.transpose();
-        A += M;
-        b += M * pose[k].p_CinW;
-    }
-    // Parallax: the smallest eigenvalue of A is ~ sum of squared angles between the rays.
-    Eigen::SelfAdjointEigenSolver<Mat3> es(A, Eigen::EigenvaluesOnly);
-    const double lmin = es.eigenvalues()(0);
     Vec3 p;
     if (depth_row) {
         // The depth prior is a measurement of the point; the rays' point is not, at low parallax
@@ -257,10 +260,22 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
         // from the optimum, which biases the linearization): start from the prior.
         p = pose[depth_k].p_CinW + pose[depth_k].R_WtoC.transpose() *
                                        (t.depth_m * Vec3(t.xn[depth_k][0], t.xn[depth_k][1], 1.0));
-    } else if (lmin > 1e-6 && std::isfinite(lmin)) {
-        p = A.ldlt().solve(b);
     } else {
-        return false;
+        // The rays' least-squares point: A p = b with A = sum (I - u u^T) over the unit rays u.
+        Mat3 A = Mat3::Zero();
+        Vec3 b = Vec3::Zero();
+        for (int k = 0; k < t.used; ++k) {
+            const Vec3 ray = pose[k].R_WtoC.transpose() * Vec3(t.xn[k][0], t.xn[k][1], 1.0);
+            const Vec3 u = ray.normalized();
+            const Mat3 M = Mat3::Identity() - u * u.transpose();
+            A += M;
+            b += M * pose[k].p_CinW;
+        }
+        // Parallax: the smallest eigenvalue of A is ~ sum of squared angles between the rays.
+        Eigen::SelfAdjointEigenSolver<Mat3> es(A, Eigen::EigenvaluesOnly);
+        const double lmin = es.eigenvalues()(0);
+        if (!(lmin > 1e-6 && std::isfinite(lmin))) return false;
+        p = A.ldlt().solve(b);
     }
     if (!all_finite(p.data(), 3)) return false;
     const double var_d = t.depth_var_m2 + w.prm.depth_var_floor_m2;
@@ -284,9 +299,8 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
             H += J * J.transpose() / var_d;
             g += J * (t.depth_m - pc.z()) / var_d;
         }
-        const Eigen::LDLT<Mat3> ldlt(H);
-        if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
-        const Vec3 dp = ldlt.solve(g);
+        Vec3 dp;
+        if (!spd_solve3(H, g, &dp)) return false;
         if (!all_finite(dp.data(), 3)) return false;
         p += dp;
         if (dp.norm() <= 1e-9 * (1.0 + p.norm())) break;
@@ -904,19 +918,20 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
     Vec3 pf;
     if (!triangulate(*w, t, pose, depth_row, dk, &pf)) return SFD_ERR_NUMERIC;
     // Row i of the residual depends on frame blk[i]'s pose through the 6-vector hp[i] (dp,
-    // dtheta) and on the point through Hf. The covariance of the stacked residual,
-    // H_x P H_x^T + R, is formed from the 6x6 blocks of P the rows touch (H_x is block sparse),
-    // then projected with the point's null space together with r: eq. (2) with H_x folded in.
+    // dtheta) and on the point through Hf. S = H_x P H_x^T + R is formed from the 6x6 blocks of P
+    // that each pair of frames touches (H_x is block sparse), in the scratch track's R.
     sfd_msckf_track_t &tr = w->scratch_track;
     const int rows = 2 * m + (depth_row ? 1 : 0);
     double hp[SFD_MSCKF_TRACK_ROWS][6];
-    int blk[SFD_MSCKF_TRACK_ROWS];
+    int frame_rows[SFD_MAX_WINDOW][3];  // the rows of frame k: 2k, 2k + 1 (and the depth row)
+    int frame_nrows[SFD_MAX_WINDOW];
+    double(*S)[SFD_MSCKF_TRACK_ROWS] = tr.R;
     tr.rows = rows;
-    tr.n = 1;  // the pose part is inside R below: one zero column
+    tr.n = 1;
     tr.projected = 0;
     for (int i = 0; i < rows; ++i) {
         tr.Hx[i][0] = 0.0;
-        for (int j = 0; j < rows; ++j) tr.R[i][j] = 0.0;
+        for (int j = 0; j < rows; ++j) S[i][j] = 0.0;
     }
     // Jacobians at the current estimates (a detection test over one window needs the right
     // covariance, not the consistency treatment of the update): d pc / d dp_I = -R_WtoC,
@@ -928,9 +943,10 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
         const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> Jp = proj_jacobian(pc);
         const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> Hth = Jp * dth;
         const Eigen::Matrix<double, 2, 3, Eigen::RowMajor> Hf = Jp * pose[k].R_WtoC;
+        frame_nrows[k] = 2;
         for (int a = 0; a < 2; ++a) {
             const int r = 2 * k + a;
-            blk[r] = k;
+            frame_rows[k][a] = r;
             for (int j = 0; j < 3; ++j) {
                 hp[r][j] = -Hf(a, j);
                 hp[r][3 + j] = Hth(a, j);
@@ -940,40 +956,54 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
         const std::size_t ru = 2U * static_cast<std::size_t>(k), rv = ru + 1U;
         tr.r[ru] = t.xn[k][0] - pc.x() / pc.z();
         tr.r[rv] = t.xn[k][1] - pc.y() / pc.z();
-        tr.R[ru][ru] = t.cov_xn[k][0];
-        tr.R[ru][rv] = t.cov_xn[k][1];
-        tr.R[rv][ru] = t.cov_xn[k][1];
-        tr.R[rv][rv] = t.cov_xn[k][2];
+        S[ru][ru] = t.cov_xn[k][0];
+        S[ru][rv] = t.cov_xn[k][1];
+        S[rv][ru] = t.cov_xn[k][1];
+        S[rv][rv] = t.cov_xn[k][2];
     }
     if (depth_row) {
         const int r = 2 * m;
         const Vec3 pc = pose[dk].R_WtoC * (pf - pose[dk].p_CinW);
         const Mat3 dth = pose[dk].R_WtoC * skew(pf - p_I[dk]);
-        blk[r] = dk;
+        frame_rows[dk][frame_nrows[dk]++] = r;
         for (int j = 0; j < 3; ++j) {
             hp[r][j] = -pose[dk].R_WtoC(2, j);
             hp[r][3 + j] = dth(2, j);
             tr.Hf[r][j] = pose[dk].R_WtoC(2, j);
         }
         tr.r[r] = t.depth_m - pc.z();
-        tr.R[r][r] = t.depth_var_m2 + w->prm.depth_var_floor_m2;
+        S[r][r] = t.depth_var_m2 + w->prm.depth_var_floor_m2;
     }
-    // R += H_x P H_x^T, row pair by row pair through the 6x6 block of P they touch.
-    for (int i = 0; i < rows; ++i) {
-        const int *si = src + static_cast<std::ptrdiff_t>(6) * blk[i];
-        for (int j = i; j < rows; ++j) {
-            const int *sj = src + static_cast<std::ptrdiff_t>(6) * blk[j];
-            double v = 0.0;
+    // S += H_x P H_x^T, frame pair by frame pair (k <= l): with P_kl the 6x6 block of the two
+    // poses, the rows i of k and j of l receive hp_i^T P_kl hp_j (and its mirror).
+    for (int k = 0; k < m; ++k) {
+        const int *sk = src + static_cast<std::ptrdiff_t>(6) * k;
+        for (int l = k; l < m; ++l) {
+            const int *sl = src + static_cast<std::ptrdiff_t>(6) * l;
+            double Pkl[6][6];
             for (int a = 0; a < 6; ++a) {
-                double pa = 0.0;
-                for (int b = 0; b < 6; ++b) pa += w->P[si[a]][sj[b]] * hp[j][b];
-                v += hp[i][a] * pa;
+                for (int b = 0; b < 6; ++b) Pkl[a][b] = w->P[sk[a]][sl[b]];
             }
-            tr.R[i][j] += v;
-            if (j != i) tr.R[j][i] += v;
+            double T[6][3];  // P_kl hp_j for the rows j of frame l
+            for (int jj = 0; jj < frame_nrows[l]; ++jj) {
+                const double *h = hp[frame_rows[l][jj]];
+                for (int a = 0; a < 6; ++a) {
+                    double v = 0.0;
+                    for (int b = 0; b < 6; ++b) v += Pkl[a][b] * h[b];
+                    T[a][jj] = v;
+                }
+            }
+            for (int ii = 0; ii < frame_nrows[k]; ++ii) {
+                const int i = frame_rows[k][ii];
+                for (int jj = (l == k ? ii : 0); jj < frame_nrows[l]; ++jj) {
+                    const int j = frame_rows[l][jj];
+                    double v = 0.0;
+                    for (int a = 0; a < 6; ++a) v += hp[i][a] * T[a][jj];
+                    S[i][j] += v;
+                    if (j != i) S[j][i] += v;
+                }
+            }
         }
     }
-    if (sfd_msckf_track_project(&tr) != SFD_OK) return SFD_ERR_NUMERIC;
-    const double zero = 0.0;  // the pose part is in R_o already
-    return sfd_msckf_track_gate(&tr, &zero, gamma, dof);
+    return sfd_msckf_track_statistic(&tr, gamma, dof);
 }

@@ -144,12 +144,22 @@ static void gate_equals_the_landmark_eliminated_statistic(void **state) {
         double y[3] = {0.0, 0.0, 0.0};
         assert_true(test_solve_dense(3, 1, FtSiF, FtSiR, y));
         const double ref = rSiR - (FtSiR[0] * y[0] + FtSiR[1] * y[1] + FtSiR[2] * y[2]);
+        /* The same statistic without N: R replaced by S, Hx not read. */
+        g_copy = g_track;
+        for (int i = 0; i < rows; ++i) {
+            for (int j = 0; j < rows; ++j) g_copy.R[i][j] = S[i * rows + j];
+        }
         assert_int_equal(sfd_msckf_track_project(&g_track), SFD_OK);
         double gamma = -1.0;
         int32_t dof = 0;
         assert_int_equal(sfd_msckf_track_gate(&g_track, g_P, &gamma, &dof), SFD_OK);
         assert_int_equal(dof, rows - 3);
         assert_true(fabs(gamma - ref) <= 1e-9 * (1.0 + fabs(ref)));
+        double gamma_gls = -1.0;
+        int32_t dof_gls = 0;
+        assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma_gls, &dof_gls), SFD_OK);
+        assert_int_equal(dof_gls, rows - 3);
+        assert_true(fabs(gamma_gls - ref) <= 1e-9 * (1.0 + fabs(ref)));
     }
 }
 
@@ -335,8 +345,27 @@ static void bad_sizes_and_degenerate_landmarks_are_status_codes(void **state) {
     assert_int_equal(sfd_msckf_track_gate(&g_track, g_P, &gamma, &dof), SFD_ERR_INVAL);
     assert_int_equal(sfd_msckf_stack_reset(&g_stack, 10), SFD_OK);
     assert_int_equal(sfd_msckf_stack_fold(&g_stack, &g_track), SFD_ERR_INVAL); /* unprojected */
+    /* The statistic without N: sizes, null, a projected track, and what it overwrites. */
+    g_copy = g_track;
+    g_copy.rows = TR + 1;
+    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_INVAL);
+    g_copy.rows = 3;
+    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_INVAL);
+    g_copy.rows = 6;
+    assert_int_equal(sfd_msckf_track_statistic(NULL, &gamma, &dof), SFD_ERR_INVAL);
+    assert_int_equal(sfd_msckf_track_statistic(&g_copy, NULL, &dof), SFD_ERR_INVAL);
+    g_copy.projected = 1;
+    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_INVAL);
+    g_copy.projected = 0;
+    g_copy.r[1] = NAN;
+    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_NUMERIC);
+    g_copy = g_track;
+    g_copy.R[0][0] = -1.0; /* not positive definite */
+    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_NUMERIC);
     /* Rank 2 (no parallax: every row's landmark direction in one plane). */
     for (int i = 0; i < 6; ++i) g_track.Hf[i][2] = 2.0 * g_track.Hf[i][0] - g_track.Hf[i][1];
+    g_copy = g_track;
+    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_NUMERIC);
     assert_int_equal(sfd_msckf_track_project(&g_track), SFD_ERR_NUMERIC);
     assert_int_equal(g_track.projected, 0);
     /* Fold into a stack of another dimension. */
