@@ -11,7 +11,7 @@
 #  - the flags of sfd-node and sfd-replay are the keys of apps/config/sfd.yaml ('_' written '-',
 #    the dot kept), the same on both, and docs/deploy.md's table lists exactly them;
 #  - progress lines: none when stderr is not a terminal (the outputs above), one on a terminal
-#    (script(1)) unless CI is set.
+#    (script(1)) unless CI is set (sfd-replay, and sfd-sim thesis-loop: the thesis sweep).
 # usage: cli_convention.sh BUILD_DIR
 set -euo pipefail
 build="$1"
@@ -110,7 +110,14 @@ if command -v script > /dev/null; then
   cmp -s p.lcmlog r3.lcmlog || fail "the progress line changed OUT"
   CI=1 script -qec "'$apps/sfd-replay' a.lcmlog -o q.lcmlog" /dev/null > tty_ci.txt
   grep -q "frames/s" tty_ci.txt && fail "a progress line with CI set"
-  echo "ok: progress line on a terminal, none with CI set"
+  # the thesis sweep (sfd-sim thesis-loop): runs done, cleared before each sweep's table
+  env -u CI script -qec "'$apps/sfd-sim' thesis-loop --quick --runs 1 --frames 40" /dev/null > tl.txt
+  grep -q "sfd-sim thesis-loop: 6 runs, [0-9]* runs/s, done in" tl.txt ||
+    fail "sfd-sim thesis-loop: no progress line on a terminal: $(cat tl.txt)"
+  "$apps/sfd-sim" thesis-loop --quick --runs 1 --frames 40 > tl_off.txt 2> tl_off.err
+  [ ! -s tl_off.err ] && ! grep -q "runs/s" tl_off.txt ||
+    fail "sfd-sim thesis-loop: a progress line off a terminal: $(cat tl_off.err)"
+  echo "ok: progress line on a terminal (sfd-replay, sfd-sim thesis-loop), none with CI set"
 fi
 
 # The flags of sfd-node and sfd-replay: the YAML keys, both ways, and docs/deploy.md's table.
