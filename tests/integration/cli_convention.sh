@@ -12,9 +12,11 @@
 #    the dot kept), the same on both, and docs/deploy.md's table lists exactly them;
 #  - progress lines: none when stderr is not a terminal (the outputs above), one on a terminal
 #    (script(1)) unless CI is set (sfd-replay, and sfd-sim thesis-loop: the thesis sweep).
-# usage: cli_convention.sh BUILD_DIR
+#  - the Python scripts of tools/ (run with PYTHON): `--help` exit 0, `--version` "SCRIPT
+#    VERSION", and an unknown option exit 2 with one line naming it on those without argparse.
+# usage: cli_convention.sh BUILD_DIR [PYTHON]
 set -euo pipefail
-build="$1"
+build="$1"; py="${2:-python3}"
 src="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 apps="$build/apps"
 tmp="$(mktemp -d)"
@@ -59,6 +61,21 @@ for s in parity assoc; do
   "$apps/sfd-bench" "$s" --version | grep -qx "sfd-bench $version" || fail "sfd-bench $s --version"
 done
 echo "ok: --help on every subcommand (sfd-sim's 8 scenarios, sfd-bench parity and assoc)"
+
+# The Python scripts of tools/ (tools/sfd_tool_cli.py): the same --help and --version.
+for f in "$src"/tools/*.py; do
+  name="$(basename "$f")"
+  [ "$name" = sfd_tool_cli.py ] && continue
+  timeout 60 "$py" "$f" --help > help.txt 2> help.err || fail "$name --help: exit $?: $(head -3 help.err)"
+  got="$(timeout 60 "$py" "$f" --version 2>&1)" || fail "$name --version: exit $?"
+  [ "$got" = "$name $version" ] || fail "$name --version: '$got', expected '$name $version'"
+  if ! grep -q "^import argparse" "$f"; then
+    usage_error "$name: unknown option --no-such-option ($name --help lists the options)" \
+      "$py" "$f" --no-such-option
+  fi
+done
+[ ! -e ./--version.png ] || fail "a script took --version for a file name"
+echo "ok: --help and --version on the Python scripts of tools/"
 
 # Unknown options (an abbreviation is one) and bad values, on every tool.
 for t in "${tools[@]}"; do
