@@ -13,6 +13,8 @@ import re
 import subprocess
 import sys
 
+import sfd_tool_cli  # tools/sfd_tool_cli.py
+
 FORBIDDEN = re.compile(
     r'^(malloc|calloc|realloc|free|aligned_alloc|posix_memalign|memalign|valloc|pvalloc'
     r'|_Znw[jm].*|_Zna[jm].*|_ZdlPv.*|_ZdaPv.*'
@@ -22,10 +24,7 @@ FORBIDDEN = re.compile(
 
 
 def main(argv):
-    if len(argv) != 3:
-        print('usage: check_core_symbols.py NM ARCHIVE', file=sys.stderr)
-        return 2
-    nm, archive = argv[1], argv[2]
+    nm, archive = sfd_tool_cli.positional(argv, __doc__, 2, 'check_core_symbols.py NM ARCHIVE')
     try:
         out = subprocess.run([nm, '-A', '-u', archive], check=True, capture_output=True, text=True).stdout
     except (OSError, subprocess.CalledProcessError) as exc:

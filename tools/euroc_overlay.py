@@ -36,6 +36,7 @@ import argparse
 import csv
 import os
 import sys
+import sfd_tool_cli  # tools/sfd_tool_cli.py
 
 import lcm
 import matplotlib
@@ -44,7 +45,19 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from sfd import feature_frame_t, feature_verdict_t  # noqa: E402
+try:  # the generated LCM types: PYTHONPATH, else $SFD_LCM_PYTHON, else build/host's (review.py)
+    from sfd import feature_frame_t, feature_verdict_t  # noqa: E402
+except ImportError:
+    for _p in (os.environ.get("SFD_LCM_PYTHON", ""), os.path.join(
+            os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "build", "host",
+            "lcm_types", "python")):
+        if _p and os.path.isdir(os.path.join(_p, "sfd")):
+            sys.path.insert(0, _p)
+            break
+    try:
+        from sfd import feature_frame_t, feature_verdict_t  # noqa: E402
+    except ImportError:  # reported by main() after --help / --version
+        feature_frame_t = feature_verdict_t = None
 
 STATUS_NAME = {0: "untested", 1: "consistent", 2: "spurious"}
 STAGE_NAME = {0: "none", 1: "parity", 2: "oprf", 3: "ransac1", 4: "ransacf"}
@@ -217,6 +230,7 @@ def draw(img_path, title, feats, prev_feats, verdict, png, epi=None, epi_limit=2
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sfd_tool_cli.add_version(ap, "euroc_overlay.py")
     ap.add_argument("--images", required=True, help="folder of <ns>.png/.jpg frames")
     ap.add_argument("--out-dir", required=True)
     ap.add_argument("--every-frame", action="store_true",
@@ -229,6 +243,10 @@ def main():
     ap.add_argument("--crops-run", help="the RUN whose verdicts colour the crops")
     ap.add_argument("runs", nargs="+", help="RUN=OUT.lcmlog (sfd-replay -o)")
     a = ap.parse_args()
+    if feature_frame_t is None:
+        print("euroc_overlay.py: no generated LCM types (package sfd): build the host preset or "
+              "set SFD_LCM_PYTHON", file=sys.stderr)
+        return 2
     if bool(a.gt) != bool(a.calib):
         sys.exit("euroc_overlay: --gt and --calib go together")
     gt = read_gt(a.gt) if a.gt else None
@@ -332,4 +350,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -30,6 +30,7 @@ import shlex
 import subprocess
 import sys
 import time
+import sfd_tool_cli  # tools/sfd_tool_cli.py
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 METHODS = ["none", "parity", "oprf", "ransac1", "ransacf", "both"]
@@ -456,6 +457,7 @@ def parse_args(argv):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog=__doc__.split("\n\n", 1)[1])
+    sfd_tool_cli.add_version(ap, "evaluate.py")
     ap.add_argument("--preset", choices=sorted(PRESETS), default="quick",
                     help="quick (the test suite's) or full (docs/evaluation.md); default quick")
     ap.add_argument("--scenarios", help="comma list of " + ", ".join(SCENARIOS))

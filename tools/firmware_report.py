@@ -24,6 +24,7 @@ import os
 import re
 import subprocess
 import sys
+import sfd_tool_cli  # tools/sfd_tool_cli.py
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from stack_report import is_project_function, parse, resolve_aliases  # noqa: E402  (same directory)
@@ -76,6 +77,7 @@ def worst_stack(graphs, allowance, fn):
 def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+    sfd_tool_cli.add_version(ap, "firmware_report.py")
     ap.add_argument('--elf', required=True)
     ap.add_argument('--size-tool', default='arm-none-eabi-size')
     ap.add_argument('--nm', default='arm-none-eabi-nm')

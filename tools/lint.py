@@ -15,6 +15,8 @@ import subprocess
 import sys
 import tempfile
 
+import sfd_tool_cli  # tools/sfd_tool_cli.py
+
 GCC_ONLY = ('-fcallgraph-info', '-fstack-usage', '-fno-associative-math')
 
 
@@ -41,6 +43,8 @@ def load(build, root):
 
 
 def main():
+    sys.argv[1:] = sfd_tool_cli.positional(sys.argv, __doc__, 2,
+                                           'lint.py clang-tidy|cppcheck BUILD [FILE...]', True)
     if len(sys.argv) < 3 or sys.argv[1] not in ('clang-tidy', 'cppcheck'):
         print(__doc__)
         return 2

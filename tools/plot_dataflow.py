@@ -7,6 +7,8 @@ usage: plot_dataflow.py OUT.png
 """
 import sys
 
+import sfd_tool_cli  # tools/sfd_tool_cli.py
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -34,9 +36,7 @@ def arrow(ax, x0, y0, x1, y1, label="", above=True, style="-|>", ls="-"):
 
 
 def main():
-    if len(sys.argv) != 2 or sys.argv[1] in ("-h", "--help"):
-        print(__doc__)
-        return 0 if len(sys.argv) == 2 else 2
+    sys.argv[1:] = sfd_tool_cli.positional(sys.argv, __doc__, 1, 'plot_dataflow.py OUT.png')
     fig, ax = plt.subplots(figsize=(11, 6.6))
     ax.set_xlim(0, 11)
     ax.set_ylim(0, 6.6)

@@ -12,6 +12,8 @@ import csv
 import math
 import sys
 
+import sfd_tool_cli  # installed next to this script (PREFIX/share/sfd)
+
 import matplotlib
 
 matplotlib.use('Agg')
@@ -26,6 +28,7 @@ def percentile(values, p):
 
 
 def main(argv):
+    argv = [argv[0]] + sfd_tool_cli.positional(argv, __doc__, 2, 'plot_hil.py CSV PNG')
     if len(argv) != 3:
         print(__doc__.strip(), file=sys.stderr)
         return 2

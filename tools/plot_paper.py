@@ -10,6 +10,8 @@ import csv
 import os
 import sys
 
+import sfd_tool_cli  # tools/sfd_tool_cli.py
+
 import matplotlib
 
 matplotlib.use('Agg')
@@ -88,9 +90,7 @@ def isolation(d):
 
 
 def main():
-    if len(sys.argv) != 2 or sys.argv[1] in ('-h', '--help'):
-        print(__doc__)
-        return 0 if len(sys.argv) == 2 else 2
+    sys.argv[1:] = sfd_tool_cli.positional(sys.argv, __doc__, 1, 'plot_paper.py DIR')
     d = sys.argv[1]
     made = []
     if os.path.exists(os.path.join(d, 'paper_fig1.csv')):

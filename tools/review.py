@@ -39,6 +39,7 @@ import html
 import io
 import os
 import sys
+import sfd_tool_cli  # tools/sfd_tool_cli.py
 
 import numpy as np
 
@@ -447,6 +448,7 @@ def fmt_us(x):
 def main():
     ap = argparse.ArgumentParser(prog="review.py", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+    sfd_tool_cli.add_version(ap, "review.py")
     ap.add_argument("log", help="an sfd-replay OUT log or an lcm-logger recording of sfd-node")
     ap.add_argument("-o", "--output", help="report file (default: LOG with .html)")
     a = ap.parse_args()

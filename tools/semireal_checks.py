@@ -26,6 +26,7 @@ import argparse
 import collections
 import os
 import sys
+import sfd_tool_cli  # tools/sfd_tool_cli.py
 
 import numpy as np
 
@@ -191,6 +192,7 @@ def check_trace(path, every):
 def main():
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sfd_tool_cli.add_version(ap, "semireal_checks.py")
     sub = ap.add_subparsers(dest="cmd", required=True)
     a_imu = sub.add_parser("imu")
     a_imu.add_argument("--data", default=os.path.join(os.path.dirname(root), "shared", "data",

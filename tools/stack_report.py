@@ -16,6 +16,7 @@ import glob
 import os
 import re
 import sys
+import sfd_tool_cli  # tools/sfd_tool_cli.py
 
 NODE_RE = re.compile(r'node:\s*\{\s*title:\s*"([^"]+)"\s*label:\s*"([^"]*)"(.*)\}')
 EDGE_RE = re.compile(r'edge:\s*\{\s*sourcename:\s*"([^"]+)"\s*targetname:\s*"([^"]+)"')
@@ -99,6 +100,7 @@ def resolve_aliases(frames, kinds, labels, edges):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sfd_tool_cli.add_version(ap, "stack_report.py")
     ap.add_argument('--objdir', required=True, help='directory holding the core objects and .ci files')
     ap.add_argument('--budget', type=int, default=16384, help='bytes per entry point (default 16384)')
     ap.add_argument('--extern-allowance', type=int, default=1024,

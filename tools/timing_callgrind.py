@@ -34,6 +34,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import sfd_tool_cli  # tools/sfd_tool_cli.py
 
 # (stage, function whose calls and inclusive cost are read)
 STAGES = [
@@ -120,6 +121,7 @@ def timing_stats(build, path):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sfd_tool_cli.add_version(ap, "timing_callgrind.py")
     ap.add_argument("--build", default="build/host")
     ap.add_argument("--frames", type=int, default=60)
     ap.add_argument("--seed", type=int, default=3)

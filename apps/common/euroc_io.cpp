@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "euroc_io.hpp"
+#include "sfd_opencv_quiet.hpp"
 
 #include <cctype>
 #include <cerrno>
@@ -194,7 +195,7 @@ bool read_euroc_sensor_yaml(const std::string &path, EurocCamera *out, std::stri
             return false;
         }
     } catch (const cv::Exception &e) {
-        *err = path + ": not valid YAML (" + e.msg + ")";
+        *err = opencv_yaml_error(path, e);
         return false;
     }
     return true;

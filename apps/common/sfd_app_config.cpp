@@ -386,7 +386,7 @@ bool read_config(const std::string &path, AppConfig *cfg, std::string *error) {
     try {
         return read_config_impl(path, cfg, error);
     } catch (const cv::Exception &e) {
-        *error = path + ": not valid YAML (" + one_line(e.msg) + ")";
+        *error = opencv_yaml_error(path, e);
     } catch (const std::exception &e) {
         *error = path + ": not valid YAML (" + one_line(e.what()) + ")";
     } catch (...) {
@@ -464,15 +464,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
             return false;
         }
     } catch (const cv::Exception &e) {
-        // OpenCV 4 puts "PATH(LINE): reason" of a parse error in e.func (and the parser's name
-        // in e.err): "PATH:LINE: not valid YAML (reason)", else its whole message.
-        const size_t close = e.func.find("): ");
-        if (e.func.rfind(path + "(", 0) == 0 && close != std::string::npos) {
-            *error = path + ":" + e.func.substr(path.size() + 1, close - path.size() - 1) +
-                     ": not valid YAML (" + e.func.substr(close + 3) + ")";
-        } else {
-            *error = path + ": not valid YAML (" + one_line(e.msg) + ")";
-        }
+        *error = opencv_yaml_error(path, e);
         return false;
     }
     const cv::FileNode root = fs.root();

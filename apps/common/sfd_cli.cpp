@@ -302,6 +302,13 @@ void Progress::finish(long long done) {
     if (enabled_) print(done, 1.0, true);  // the totals, once, on a terminal
 }
 
+void Progress::clear() {
+    if (!enabled_ || !printed_) return;
+    std::fprintf(stderr, "\r\033[K");
+    std::fflush(stderr);
+    printed_ = false;
+}
+
 void Progress::print(long long done, double fraction, bool last) {
     const double elapsed_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();

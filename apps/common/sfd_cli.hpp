@@ -117,6 +117,9 @@ class Progress {
     void update(long long done, double fraction);
     /// The last line (totals and time taken), ended with a newline; on a terminal only.
     void finish(long long done);
+    /// Clears the progress line (if one is shown), so that text printed on stdout starts on a
+    /// clean line; the next update() draws it again.
+    void clear();
     bool enabled() const { return enabled_; }
 
   private:

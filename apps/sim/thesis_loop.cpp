@@ -85,11 +85,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "sfd/sfd.h"
+#include "sfd_cli.hpp"
 #include "sfd_eval.hpp"
 
 namespace sfdsim {
@@ -664,7 +666,7 @@ double std_error(const std::vector<double> &v) {
 }
 
 bool run_point(const ThesisOptions &opt, const Reference &ref, const Levels &lv, PointResult *pr,
-               Workspace *ws) {
+               Workspace *ws, const std::function<void()> &run_done) {
     pr->lv = lv;
     pr->sg = sigmas_of(lv, ref);
     const sfd_ekf_camera_t cam = make_camera(pr->sg.px);
@@ -694,6 +696,7 @@ bool run_point(const ThesisOptions &opt, const Reference &ref, const Levels &lv,
             pr->diverged[mi] += (one.final_err > kDivergedM) ? 1 : 0;
             pr->faults[mi] += one.numeric_faults;
         }
+        run_done();
     }
     return true;
 }
@@ -959,18 +962,30 @@ int run_thesis_loop(const ThesisOptions &opt) {
         "association and update stages (association + EKF update)\n",
         kNominalMeasPct, kNominalCtrlPct, kNominalMismatchPct);
     auto ws = std::make_unique<Workspace>();
+    // A progress line on a terminal (stderr, CI unset): runs done (one run = every method over
+    // --frames frames at one sweep point), cleared before each sweep's table on stdout.
+    long long runs_total = 0, runs_done = 0;
+    for (const Sweep &s : sweeps) runs_total += static_cast<long long>(s.levels.size()) * opt.runs;
+    sfdcli::Progress progress("sfd-sim thesis-loop", "runs");
+    const std::function<void()> run_done = [&] {
+        ++runs_done;
+        progress.update(runs_done, double(runs_done) / double(runs_total));
+    };
     for (Sweep &s : sweeps) {
         for (double level : s.levels) {
             PointResult p;
-            if (!run_point(opt, ref, levels_for(s.which, level), &p, ws.get())) {
+            if (!run_point(opt, ref, levels_for(s.which, level), &p, ws.get(), run_done)) {
+                progress.clear();
                 if (rm != nullptr) std::fclose(rm);
                 if (tm != nullptr) std::fclose(tm);
                 return 1;
             }
             s.points.push_back(std::move(p));
         }
+        progress.clear();
         print_sweep(s);
     }
+    progress.finish(runs_done);
     if (rm != nullptr && tm != nullptr) {
         write_csvs(rm, tm, sweeps, opt, ref);
         const bool ok = std::fclose(rm) == 0;

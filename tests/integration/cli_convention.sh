@@ -11,10 +11,12 @@
 #  - the flags of sfd-node and sfd-replay are the keys of apps/config/sfd.yaml ('_' written '-',
 #    the dot kept), the same on both, and docs/deploy.md's table lists exactly them;
 #  - progress lines: none when stderr is not a terminal (the outputs above), one on a terminal
-#    (script(1)) unless CI is set.
-# usage: cli_convention.sh BUILD_DIR
+#    (script(1)) unless CI is set (sfd-replay, and sfd-sim thesis-loop: the thesis sweep).
+#  - the Python scripts of tools/ (run with PYTHON): `--help` exit 0, `--version` "SCRIPT
+#    VERSION", and an unknown option exit 2 with one line naming it on those without argparse.
+# usage: cli_convention.sh BUILD_DIR [PYTHON]
 set -euo pipefail
-build="$1"
+build="$1"; py="${2:-python3}"
 src="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 apps="$build/apps"
 tmp="$(mktemp -d)"
@@ -59,6 +61,21 @@ for s in parity assoc; do
   "$apps/sfd-bench" "$s" --version | grep -qx "sfd-bench $version" || fail "sfd-bench $s --version"
 done
 echo "ok: --help on every subcommand (sfd-sim's 8 scenarios, sfd-bench parity and assoc)"
+
+# The Python scripts of tools/ (tools/sfd_tool_cli.py): the same --help and --version.
+for f in "$src"/tools/*.py; do
+  name="$(basename "$f")"
+  [ "$name" = sfd_tool_cli.py ] && continue
+  timeout 60 "$py" "$f" --help > help.txt 2> help.err || fail "$name --help: exit $?: $(head -3 help.err)"
+  got="$(timeout 60 "$py" "$f" --version 2>&1)" || fail "$name --version: exit $?"
+  [ "$got" = "$name $version" ] || fail "$name --version: '$got', expected '$name $version'"
+  if ! grep -q "^import argparse" "$f"; then
+    usage_error "$name: unknown option --no-such-option ($name --help lists the options)" \
+      "$py" "$f" --no-such-option
+  fi
+done
+[ ! -e ./--version.png ] || fail "a script took --version for a file name"
+echo "ok: --help and --version on the Python scripts of tools/"
 
 # Unknown options (an abbreviation is one) and bad values, on every tool.
 for t in "${tools[@]}"; do
@@ -110,7 +127,14 @@ if command -v script > /dev/null; then
   cmp -s p.lcmlog r3.lcmlog || fail "the progress line changed OUT"
   CI=1 script -qec "'$apps/sfd-replay' a.lcmlog -o q.lcmlog" /dev/null > tty_ci.txt
   grep -q "frames/s" tty_ci.txt && fail "a progress line with CI set"
-  echo "ok: progress line on a terminal, none with CI set"
+  # the thesis sweep (sfd-sim thesis-loop): runs done, cleared before each sweep's table
+  env -u CI script -qec "'$apps/sfd-sim' thesis-loop --quick --runs 1 --frames 40" /dev/null > tl.txt
+  grep -q "sfd-sim thesis-loop: 6 runs, [0-9]* runs/s, done in" tl.txt ||
+    fail "sfd-sim thesis-loop: no progress line on a terminal: $(cat tl.txt)"
+  "$apps/sfd-sim" thesis-loop --quick --runs 1 --frames 40 > tl_off.txt 2> tl_off.err
+  [ ! -s tl_off.err ] && ! grep -q "runs/s" tl_off.txt ||
+    fail "sfd-sim thesis-loop: a progress line off a terminal: $(cat tl_off.err)"
+  echo "ok: progress line on a terminal (sfd-replay, sfd-sim thesis-loop), none with CI set"
 fi
 
 # The flags of sfd-node and sfd-replay: the YAML keys, both ways, and docs/deploy.md's table.

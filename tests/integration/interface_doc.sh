@@ -11,7 +11,10 @@
 #                   excerpt, with the repository paths mapped to this build; its report exists
 #                   with its sections and figures, and its counts equal sfd-replay's summary.
 #                   Skipped (77) when ../shared/data is absent.
-# usage: interface_doc.sh publisher|three_commands BUILD_DIR SOURCE_DIR PYTHON PYTHONPATH DATA_DIR
+#  figures          integration.interface_figures: every image docs/interface.md shows is a
+#                   PNG file committed in the repository, and the three figures issue 19 asks
+#                   for are among them (data flow, a verdict overlay on a EuRoC frame, the ROC).
+# usage: interface_doc.sh publisher|three_commands|figures BUILD_DIR SOURCE_DIR PYTHON PYTHONPATH DATA_DIR
 set -euo pipefail
 mode="$1"; build="$2"; src="$3"; py="$4"; pytypes="$5"; datadir="$6"
 doc="$src/docs/interface.md"
@@ -28,6 +31,31 @@ block() {
 }
 
 case "$mode" in
+figures)
+  "$py" - "$doc" "$src" <<'PYEOF'
+import os, re, subprocess, sys
+doc, src = sys.argv[1:3]
+links = re.findall(r"!\[([^\]]*)\]\(([^)]+)\)", open(doc, encoding="utf-8").read())
+# committed: the files git tracks (no check outside a git checkout, e.g. a source tarball)
+tracked = set(subprocess.run(["git", "-C", src, "ls-files", "docs"], capture_output=True,
+                             text=True, check=False).stdout.split())
+bad = 0
+for alt, path in links:
+    rel = os.path.relpath(os.path.normpath(os.path.join(os.path.dirname(doc), path)), src)
+    full = os.path.join(src, rel)
+    if not os.path.isfile(full) or open(full, "rb").read(8) != b"\x89PNG\r\n\x1a\n":
+        print("docs/interface.md: %s: not a PNG file" % path); bad = 1
+    elif tracked and rel not in tracked:
+        print("docs/interface.md: %s: not committed" % path); bad = 1
+alts = " | ".join(a.lower() for a, _ in links)
+for want in ("data flow", "euroc", "roc"):  # whole words: "euroc" holds "roc"
+    if not re.search(r"\b%s\b" % want, alts):
+        print("docs/interface.md: no figure whose caption names %r (images: %s)" % (want, alts))
+        bad = 1
+print("interface_figures: %d images, all committed PNGs: %s" % (len(links), alts))
+sys.exit(bad)
+PYEOF
+  ;;
 publisher)
   block "integration.interface_publisher runs the block below" python > "$tmp/pub.py"
   code_lines=$(grep -cv '^[[:space:]]*$' "$tmp/pub.py" || true)

@@ -136,6 +136,13 @@ expect_fail "ground-truth gap" "state_groundtruth_estimate0/data.csv:19-20: grou
 bad yaml; sed -i '/^intrinsics:/d' "$tmp/yaml/mav0/cam0/sensor.yaml"
 expect_fail "sensor.yaml key" "sensor.yaml: intrinsics: expected a list of 4 numbers" \
   euroc-semireal --euroc "$tmp/yaml" -o "$tmp/x.lcmlog"
+# A YAML syntax error: one line "PATH:LINE: not valid YAML (reason)", not OpenCV's own message
+# ("OpenCV(4.6.0) ./modules/...: error: (-212:Parsing error) ...") with its line break.
+bad yamlsyntax; sed -i 's/^resolution: \[752, 480\]/resolution: [752,/' "$tmp/yamlsyntax/mav0/cam0/sensor.yaml"
+expect_fail "sensor.yaml syntax" "^sfd-sim: .*/sensor\.yaml:[0-9]+: not valid YAML \(Incorrect indentation\)\$" \
+  euroc-semireal --euroc "$tmp/yamlsyntax" -o "$tmp/x.lcmlog"
+[ "$(wc -l < "$tmp/err.txt")" -eq 1 ] && ! grep -q "OpenCV" "$tmp/err.txt" || {
+  echo "FAIL: the sensor.yaml syntax error is not one line of sfd's own:"; cat "$tmp/err.txt"; exit 1; }
 expect_fail "missing folder" "nowhere/imu0/data.csv: cannot open" \
   euroc-semireal --euroc "$tmp/nowhere" -o "$tmp/x.lcmlog"
 expect_fail "no --euroc" "needs --euroc DIR and -o" euroc-semireal -o "$tmp/x.lcmlog"
