@@ -610,9 +610,9 @@ static detection_t run_outlier_scenes(int forward, int scenes, uint64_t seed) {
         make_scene(&gen, &o, 200, &s);
         uint8_t inlier[200];
         sfd_ransacf_result_t r;
-        assert_status(
-            sfd_ransacf(s.x_prev, s.x_curr, 200, thr, 0.99, SFD_MAX_HYPOTHESES, &rng, inlier, &r),
-            SFD_OK);
+        assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, 200, thr, 0.99, SFD_MAX_HYPOTHESES,
+                                  &rng, inlier, &r),
+                      SFD_OK);
         assert_result_consistent(&s, inlier, &r, thr);
         /* eq. (27) counts on the true inlier ratio, but a minimal sample's F at this gate keeps
          * only ~half of the inliers (OpenCV's 8-point does the same on the same samples), so N
@@ -679,16 +679,17 @@ static void ransacf_adapts_hypothesis_count_by_eq27(void **state) {
     uint8_t inlier[200];
     sfd_ransacf_result_t r;
     for (int rep = 0; rep < 5; ++rep) {
-        assert_status(
-            sfd_ransacf(s.x_prev, s.x_curr, 200, thr, 0.99, SFD_MAX_HYPOTHESES, &rng, inlier, &r),
-            SFD_OK);
+        assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, 200, thr, 0.99, SFD_MAX_HYPOTHESES,
+                                  &rng, inlier, &r),
+                      SFD_OK);
         assert_true(r.num_inliers >= 140 && r.num_inliers <= 143);
         assert_int_equal(r.hypotheses_used, sfd_ransac_hypothesis_count(0.99, r.num_inliers / 200.0,
                                                                         8, SFD_MAX_HYPOTHESES));
         assert_true(r.hypotheses_used <= 78);
         assert_int_equal(r.budget_exhausted, 0);
     }
-    assert_status(sfd_ransacf(s.x_prev, s.x_curr, 200, thr, 0.99, 20, &rng, inlier, &r), SFD_OK);
+    assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, 200, thr, 0.99, 20, &rng, inlier, &r),
+                  SFD_OK);
     assert_int_equal(r.hypotheses_used, 20);
     assert_int_equal(r.budget_exhausted, 1);
 }
@@ -712,7 +713,7 @@ static void ransacf_all_outliers_budget_never_exceeded(void **state) {
         uint8_t inlier[200];
         sfd_ransacf_result_t r;
         const sfd_status_t st =
-            sfd_ransacf(s.x_prev, s.x_curr, 200, thr, 0.99, budgets[b], &rng, inlier, &r);
+            sfd_ransacf(s.x_prev, s.x_curr, NULL, 200, thr, 0.99, budgets[b], &rng, inlier, &r);
         assert_int_equal(st, SFD_OK);
         assert_int_equal(r.hypotheses_used, budgets[b]);
         assert_int_equal(r.budget_exhausted, 1);
@@ -737,9 +738,9 @@ static void ransacf_no_outliers_every_match_kept(void **state) {
         const double thr = chi2_threshold(0.5, noisy ? 1e-9 : 0.01);
         uint8_t inlier[200];
         sfd_ransacf_result_t r;
-        assert_status(
-            sfd_ransacf(s.x_prev, s.x_curr, 200, thr, 0.99, SFD_MAX_HYPOTHESES, &rng, inlier, &r),
-            SFD_OK);
+        assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, 200, thr, 0.99, SFD_MAX_HYPOTHESES,
+                                  &rng, inlier, &r),
+                      SFD_OK);
         assert_int_equal(r.num_inliers, 200);
         for (int i = 0; i < 200; ++i) assert_int_equal(inlier[i], 1);
         assert_int_equal(r.budget_exhausted, 0);
@@ -772,12 +773,15 @@ static void ransacf_same_seed_identical_output(void **state) {
     sfd_ransacf_result_t o1, o2, o3;
     memset(&o1, 0x11, sizeof o1);
     memset(&o2, 0x22, sizeof o2);
-    assert_status(sfd_ransacf(s.x_prev, s.x_curr, 150, thr, 0.99, 200, &r1, in1, &o1), SFD_OK);
-    assert_status(sfd_ransacf(s.x_prev, s.x_curr, 150, thr, 0.99, 200, &r2, in2, &o2), SFD_OK);
+    assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, 150, thr, 0.99, 200, &r1, in1, &o1),
+                  SFD_OK);
+    assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, 150, thr, 0.99, 200, &r2, in2, &o2),
+                  SFD_OK);
     assert_memory_equal(in1, in2, sizeof in1);
     assert_memory_equal(&o1, &o2, sizeof o1);
     assert_memory_equal(&r1, &r2, sizeof r1);
-    assert_status(sfd_ransacf(s.x_prev, s.x_curr, 150, thr, 0.99, 200, &r3, in3, &o3), SFD_OK);
+    assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, 150, thr, 0.99, 200, &r3, in3, &o3),
+                  SFD_OK);
     assert_result_consistent(&s, in3, &o3, thr);
     assert_true(o1.num_inliers >= 95 && o3.num_inliers >= 95); /* of 105 true inliers */
 }
@@ -797,7 +801,7 @@ static void ransacf_fewer_than_8_matches_range_all_untested(void **state) {
     sfd_ransacf_result_t r;
     memset(inlier, 0xAA, sizeof inlier);
     memset(&r, 0xAA, sizeof r);
-    assert_status(sfd_ransacf(s.x_prev, s.x_curr, 7, 1.0, 0.99, 10, &rng, inlier, &r),
+    assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, 7, 1.0, 0.99, 10, &rng, inlier, &r),
                   SFD_ERR_RANGE);
     for (int i = 0; i < 7; ++i) assert_int_equal(inlier[i], 0);
     for (int i = 7; i < 16; ++i) assert_int_equal(inlier[i], 0xAA);
@@ -805,7 +809,7 @@ static void ransacf_fewer_than_8_matches_range_all_untested(void **state) {
     assert_memory_equal(&r, &zero, sizeof r);
     assert_memory_equal(&rng, &rng0, sizeof rng);
     memset(inlier, 0xAA, sizeof inlier);
-    assert_status(sfd_ransacf(s.x_prev, s.x_curr, 0, 1.0, 0.99, 10, &rng, inlier, &r),
+    assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, 0, 1.0, 0.99, 10, &rng, inlier, &r),
                   SFD_ERR_RANGE);
     assert_int_equal(inlier[0], 0xAA);
 }
@@ -825,7 +829,7 @@ static void ransacf_all_samples_degenerate_numeric_all_untested(void **state) {
     uint8_t inlier[50];
     memset(inlier, 0xAA, sizeof inlier);
     sfd_ransacf_result_t r;
-    assert_status(sfd_ransacf(s.x_prev, s.x_curr, 50, 1.0, 0.99, 20, &rng, inlier, &r),
+    assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, 50, 1.0, 0.99, 20, &rng, inlier, &r),
                   SFD_ERR_NUMERIC);
     for (int i = 0; i < 50; ++i) assert_int_equal(inlier[i], 0);
     assert_int_equal(r.hypotheses_used, 20);
@@ -841,7 +845,7 @@ static void expect_rejected(const scene_t *s, int32_t n, double thr, double conf
     sfd_ransacf_result_t r;
     memset(inlier, 0xAA, sizeof inlier);
     memset(&r, 0xAA, sizeof r);
-    assert_status(sfd_ransacf(s->x_prev, s->x_curr, n, thr, conf, budget, rng,
+    assert_status(sfd_ransacf(s->x_prev, s->x_curr, NULL, n, thr, conf, budget, rng,
                               null_inlier ? NULL : inlier, null_out ? NULL : &r),
                   expected);
     for (size_t i = 0; i < sizeof inlier; ++i) assert_int_equal(inlier[i], 0xAA);
@@ -866,9 +870,12 @@ static void ransacf_invalid_arguments_rejected_no_write_past_arrays(void **state
     const double thr = 2.0;
     sfd_ransacf_result_t r;
     uint8_t inl[8];
-    assert_status(sfd_ransacf(NULL, s.x_curr, 50, thr, 0.99, 10, &rng, inl, &r), SFD_ERR_INVAL);
-    assert_status(sfd_ransacf(s.x_prev, NULL, 50, thr, 0.99, 10, &rng, inl, &r), SFD_ERR_INVAL);
-    assert_status(sfd_ransacf(s.x_prev, s.x_curr, 50, thr, 0.99, 10, NULL, inl, &r), SFD_ERR_INVAL);
+    assert_status(sfd_ransacf(NULL, s.x_curr, NULL, 50, thr, 0.99, 10, &rng, inl, &r),
+                  SFD_ERR_INVAL);
+    assert_status(sfd_ransacf(s.x_prev, NULL, NULL, 50, thr, 0.99, 10, &rng, inl, &r),
+                  SFD_ERR_INVAL);
+    assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, 50, thr, 0.99, 10, NULL, inl, &r),
+                  SFD_ERR_INVAL);
     expect_rejected(&s, 50, thr, 0.99, 10, &rng, 1, 0, SFD_ERR_INVAL);
     expect_rejected(&s, 50, thr, 0.99, 10, &rng, 0, 1, SFD_ERR_INVAL);
     expect_rejected(&s, -1, thr, 0.99, 10, &rng, 0, 0, SFD_ERR_INVAL);
@@ -895,7 +902,7 @@ static void ransacf_invalid_arguments_rejected_no_write_past_arrays(void **state
     const int32_t ns[2] = {kMaxPts, 37};
     for (int c = 0; c < 2; ++c) {
         memset(inlier, 0xAA, sizeof inlier);
-        assert_status(sfd_ransacf(s.x_prev, s.x_curr, ns[c], chi2_threshold(0.5, 0.01), 0.99,
+        assert_status(sfd_ransacf(s.x_prev, s.x_curr, NULL, ns[c], chi2_threshold(0.5, 0.01), 0.99,
                                   SFD_MAX_HYPOTHESES, &rng, inlier, &r),
                       SFD_OK);
         for (int i = 0; i < ns[c]; ++i) assert_true(inlier[i] <= 1);
