@@ -103,7 +103,8 @@ typedef struct {
  *
  * Each hypothesis draws 8 distinct matches (partial Fisher-Yates with sfd_prng_uniform_index),
  * fits F with sfd_fundamental_8point() (a degenerate sample counts as a used hypothesis and is
- * skipped), and counts the matches whose Sampson distance is <= @p threshold_sq_px2. The first
+ * skipped), and counts the matches whose Sampson distance (sfd_sampson_cov_sq_px2() when @p noise
+ * is given) is <= @p threshold_sq_px2. The first
  * hypothesis with the largest count wins; each improvement sets the hypothesis count N by eq. (27)
  * with the inlier ratio best/n and m = 8, never above @p max_hypotheses. sfd addition (not in the
  * thesis): F is refit once by least squares on the winning inlier set and the matches rescored;
