@@ -10,6 +10,7 @@
 #include "ekf.hpp"
 #include "rotation.hpp"
 #include "sampson.hpp"
+#include "small_linalg.hpp"
 #include "sfd/sfd_assoc.h"
 #include "sfd/sfd_chi2.h"
 #include "sfd/sfd_parity.h"
@@ -31,17 +32,31 @@ Mat3 intrinsics_inverse(const sfd_ekf_camera_t &cam) {
     return Ki;
 }
 
-/// Squared distance (px^2) of match @p mt under @p model, or +inf when it cannot be formed.
+/// Distance of match @p mt under @p model, or +inf when it cannot be formed, with the pixel noise
+/// of both observations carried through the distortion Jacobian (mt.noise, C = I + dC):
+/// - kSampson: e^2 / (g1^T C_prev g1 + g2^T C_curr g2) (sampson.hpp), px^2;
+/// - kTransfer: r^T M^-1 r with r = H_inf x_prev - x_curr and M = (C_prev + C_curr) / 2, px^2
+///   (Cov(r) = sigma^2 (C_prev + C_curr) = 2 sigma^2 M, taking d(H_inf x)/dx = I: a rotation of a
+///   frame's interval moves pixels rigidly to first order);
+/// - kReproj: r^T S^-1 r with r = h(landmark) - x_curr and @p S_px2 = sigma^2 C_curr + J_L C_L
+///   J_L^T (xx, xy, yy), dimensionless (chi2(2) for a true match).
 double distance_px2(Score score, const sfd_ekf_camera_t &cam, const Model &model,
-                    const sfd_match_t &mt) {
+                    const sfd_match_t &mt, const double *S_px2) {
     const double inf = std::numeric_limits<double>::infinity();
-    if (score == Score::kSampson) return sampson_px2(model.F, mt.prev_uv_px, mt.obs.uv_px);
+    if (score == Score::kSampson) {
+        return sampson_px2(model.F, mt.prev_uv_px, mt.obs.uv_px, mt.noise.prev_dC,
+                           mt.noise.curr_dC);
+    }
     if (score == Score::kTransfer) {
         const Vec3 x = model.H_inf * Vec3(mt.prev_uv_px[0], mt.prev_uv_px[1], 1.0);
         if (!(std::fabs(x.z()) > 1e-12)) return inf;
         const double du = x.x() / x.z() - mt.obs.uv_px[0];
         const double dv = x.y() / x.z() - mt.obs.uv_px[1];
-        const double d = du * du + dv * dv;
+        const float *p = mt.noise.prev_dC;
+        const float *c = mt.noise.curr_dC;
+        const double d = quad_inv_excess(du, dv, 0.5 * (static_cast<double>(p[0]) + c[0]),
+                                         0.5 * (static_cast<double>(p[1]) + c[1]),
+                                         0.5 * (static_cast<double>(p[2]) + c[2]));
         return std::isfinite(d) ? d : inf;
     }
     Vec2 uv;
@@ -52,7 +67,9 @@ double distance_px2(Score score, const sfd_ekf_camera_t &cam, const Model &model
     }
     const double du = uv(0) - mt.obs.uv_px[0];
     const double dv = uv(1) - mt.obs.uv_px[1];
-    return du * du + dv * dv;
+    double q = 0.0;
+    if (!la::inv_quadratic_2x2(S_px2[0], S_px2[1], S_px2[1], S_px2[2], du, dv, &q)) return inf;
+    return std::isfinite(q) ? q : inf;
 }
 
 /// Threshold of a match in px^2 and its normalizer (the sigma^2 of the statistic).
@@ -61,12 +78,12 @@ struct Gate {
     double unit_px2;
 };
 
-Gate gate_of(Score score, const sfd_assoc_t &a, double sigma2, double noise_px2) {
+Gate gate_of(Score score, const sfd_assoc_t &a, double sigma2) {
     switch (score) {
         case Score::kSampson:  // Sampson / (s sigma^2) ~ chi2(1) for a true match
             return Gate{a.chi2_1 * a.sampson_scale * sigma2, a.sampson_scale * sigma2};
-        case Score::kReproj:  // reprojection / (sigma^2 + landmark spread) ~ chi2(2)
-            return Gate{a.chi2_2 * noise_px2, noise_px2};
+        case Score::kReproj:  // r^T S^-1 r ~ chi2(2), already normalized
+            return Gate{a.chi2_2, 1.0};
         case Score::kTransfer:  // both pixels noisy: 2 sigma^2 per axis, plus allowed parallax
         default:
             return Gate{
@@ -76,6 +93,18 @@ Gate gate_of(Score score, const sfd_assoc_t &a, double sigma2, double noise_px2)
 }
 
 }  // namespace
+
+/// R of a linearized match becomes sigma^2 C_curr + J_L C_L J_L^T: the isotropic sigma^2 I that
+/// linearize() put in plus sigma^2 dC_curr (exactly R for dC = 0). Used by the tests (RANSAC1's
+/// reprojection covariance, OPRF's gate); the association's own filter updates keep sigma^2 I
+/// (in the pipeline the window filter makes the update, with its own cov_xn).
+void add_pixel_noise(Linearized *lin, double sigma2, const sfd_match_t &m) {
+    const float *dc = m.noise.curr_dC;
+    lin->R(0, 0) += sigma2 * dc[0];
+    lin->R(0, 1) += sigma2 * dc[1];
+    lin->R(1, 0) += sigma2 * dc[1];
+    lin->R(1, 1) += sigma2 * dc[2];
+}
 
 /// Builds the scoring model of a current IMU pose. With X_prev = R X_cur + t the coordinates of a
 /// point in the previous and current cameras, R = R_WtoCprev R_CcurToW and t = R_WtoCprev
@@ -108,8 +137,8 @@ int32_t score_all(sfd_assoc_t *a, Score score, const sfd_ekf_camera_t &cam, cons
     for (int32_t i = 0; i < n; ++i) {
         a->cur[i] = 0U;
         if (a->valid[i] == 0U || (only != nullptr && only[i] == 0U)) continue;
-        const double d = distance_px2(score, cam, model, m[i]);
-        const Gate g = gate_of(score, *a, sigma2, a->noise_px2[i]);
+        const double d = distance_px2(score, cam, model, m[i], a->work.ransac1.S_px2[i]);
+        const Gate g = gate_of(score, *a, sigma2);
         a->cur_stat[i] = static_cast<float>(std::fmin(d / g.unit_px2, 3.0e38));
         if (d <= g.thr_px2) {
             a->cur[i] = 1U;
@@ -176,10 +205,10 @@ namespace {
 /// Above this the depth is not finite (overflow of the camera transform).
 constexpr double kInfDepth_m = std::numeric_limits<double>::max();
 
-/// A match is 16 doubles and nothing else (checked finite in one pass).
+/// A match is 16 doubles (checked finite in one pass) followed by its pixel noise.
 constexpr std::size_t kMatchDoubles = 16;
-static_assert(sizeof(sfd_match_t) == kMatchDoubles * sizeof(double),
-              "sfd_match_t must hold exactly its 16 doubles");
+static_assert(offsetof(sfd_match_t, noise) == kMatchDoubles * sizeof(double),
+              "sfd_match_t must start with exactly its 16 doubles");
 
 bool same_prior(const sfd_assoc_t &a, const sfd_ekf_t &ekf) {
     return sfd_bits_equal(a.prior_p_m, ekf.p_IinW_m, 3) != 0 &&
@@ -232,12 +261,13 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
     for (int k = 0; k < 4; ++k) a.prior_q[k] = ekf->q_ItoW[k];
 
     // Validity of every match at the prior (landmark in front of the camera, finite input) and
-    // the mean inverse depth; RANSAC1 also needs each landmark's spread in pixels.
+    // the mean inverse depth; RANSAC1 also needs each match's reprojection covariance.
     const Mat3 R_prior = ekf_rotation(*ekf);
     const Linearizer lz(*ekf, R_prior, *cam);
     const double sigma2 = cam->pixel_sigma_px * cam->pixel_sigma_px;
     const bool need_spread = (prm.method == SFD_METHOD_RANSAC1);
     const bool pack_pixels = (prm.method == SFD_METHOD_RANSACF);
+    const bool pack_oprf = (prm.method == SFD_METHOD_OPRF);
     const double inv_fx = 1.0 / cam->fx_px;
     const double inv_fy = 1.0 / cam->fy_px;
     const std::size_t nbytes = static_cast<std::size_t>(n);
@@ -253,34 +283,49 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
         const sfd_match_t &mt = matches[i];
         // All 16 inputs finite and the landmark in front of the prior camera. (A landmark whose
         // other camera coordinates overflow fails later, in linearize(), and is never an update.)
-        if (!all_finite_repr<kMatchDoubles>(&mt)) continue;
+        if (!all_finite_repr<kMatchDoubles>(&mt) || !pixel_noise_valid(mt.noise)) continue;
         const double depth_m = lz.depth_m(mt.obs.landmark_W_m);
         if (!(depth_m > 1e-6 && depth_m < kInfDepth_m)) continue;
         if (need_spread) {
             Linearized lin;
             if (!lz.linearize(mt.obs, &lin)) continue;
-            a.noise_px2[i] = 0.5 * (lin.R(0, 0) + lin.R(1, 1));  // sigma^2 + landmark spread
-        } else {
-            a.noise_px2[i] = sigma2;
+            add_pixel_noise(&lin, sigma2, mt);  // S = sigma^2 C_curr + landmark spread
+            double *S = a.work.ransac1.S_px2[i];
+            S[0] = lin.R(0, 0);
+            S[1] = 0.5 * (lin.R(0, 1) + lin.R(1, 0));
+            S[2] = lin.R(1, 1);
         }
         a.valid[i] = 1U;
         if (pack_pixels) {  // the fundamental-matrix RANSAC's inputs
-            a.x_prev[nv][0] = mt.prev_uv_px[0];
-            a.x_prev[nv][1] = mt.prev_uv_px[1];
-            a.x_curr[nv][0] = mt.obs.uv_px[0];
-            a.x_curr[nv][1] = mt.obs.uv_px[1];
-        } else {  // OPRF's scoring inputs (unused by the other methods)
-            a.nx_prev_u[nv] = static_cast<float>((mt.prev_uv_px[0] - cam->cx_px) * inv_fx);
-            a.nx_prev_v[nv] = static_cast<float>((mt.prev_uv_px[1] - cam->cy_px) * inv_fy);
-            a.nx_curr_u[nv] = static_cast<float>((mt.obs.uv_px[0] - cam->cx_px) * inv_fx);
-            a.nx_curr_v[nv] = static_cast<float>((mt.obs.uv_px[1] - cam->cy_px) * inv_fy);
+            sfd_assoc_ransacf_work_t &w = a.work.ransacf;
+            w.x_prev[nv][0] = mt.prev_uv_px[0];
+            w.x_prev[nv][1] = mt.prev_uv_px[1];
+            w.x_curr[nv][0] = mt.obs.uv_px[0];
+            w.x_curr[nv][1] = mt.obs.uv_px[1];
+            w.noise[nv] = mt.noise;
+        } else if (pack_oprf) {  // OPRF's scoring inputs
+            sfd_assoc_oprf_work_t &w = a.work.oprf;
+            w.nx_prev_u[nv] = static_cast<float>((mt.prev_uv_px[0] - cam->cx_px) * inv_fx);
+            w.nx_prev_v[nv] = static_cast<float>((mt.prev_uv_px[1] - cam->cy_px) * inv_fy);
+            w.nx_curr_u[nv] = static_cast<float>((mt.obs.uv_px[0] - cam->cx_px) * inv_fx);
+            w.nx_curr_v[nv] = static_cast<float>((mt.obs.uv_px[1] - cam->cy_px) * inv_fy);
+            w.dc_prev_xx[nv] = mt.noise.prev_dC[0];
+            w.dc_prev_xy[nv] = mt.noise.prev_dC[1];
+            w.dc_prev_yy[nv] = mt.noise.prev_dC[2];
+            w.dc_curr_xx[nv] = mt.noise.curr_dC[0];
+            w.dc_curr_xy[nv] = mt.noise.curr_dC[1];
+            w.dc_curr_yy[nv] = mt.noise.curr_dC[2];
         }
         a.valid_idx[nv++] = i;
         inv_depth_sum += 1.0 / depth_m;
     }
-    for (int32_t k = nv; k < SFD_ASSOC_PACKED_CAP && (k % SFD_ASSOC_SCORE_BLOCK) != 0; ++k) {
+    for (int32_t k = nv; pack_oprf && k < SFD_ASSOC_PACKED_CAP && (k % SFD_ASSOC_SCORE_BLOCK) != 0;
+         ++k) {
         const float nan = std::numeric_limits<float>::quiet_NaN();  // never an inlier
-        a.nx_prev_u[k] = a.nx_prev_v[k] = a.nx_curr_u[k] = a.nx_curr_v[k] = nan;
+        sfd_assoc_oprf_work_t &w = a.work.oprf;
+        w.nx_prev_u[k] = w.nx_prev_v[k] = w.nx_curr_u[k] = w.nx_curr_v[k] = nan;
+        w.dc_prev_xx[k] = w.dc_prev_xy[k] = w.dc_prev_yy[k] = 0.0F;
+        w.dc_curr_xx[k] = w.dc_curr_xy[k] = w.dc_curr_yy[k] = 0.0F;
     }
     a.stage = SFD_STAGE_NONE;
     a.sampson_scale = 1.0;
@@ -348,7 +393,9 @@ extern "C" sfd_status_t sfd_assoc_apply(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
             ++skipped;
             continue;
         }
-        if (oprf && !passes_gate(a, lin, Lss, &d2)) {
+        Linearized lin_test = lin;  // the gate's R carries the pixel noise through distortion
+        add_pixel_noise(&lin_test, cam->pixel_sigma_px * cam->pixel_sigma_px, matches[i]);
+        if (oprf && !passes_gate(a, lin_test, Lss, &d2)) {
             a.best[i] = 0U;
             a.best_stat[i] = static_cast<float>(std::fmin(d2, 3.0e38));
             out->inliers_stage1 -= 1;

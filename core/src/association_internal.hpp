@@ -15,8 +15,8 @@ namespace assoc {
 
 /// How a hypothesis scores a match.
 enum class Score {
-    kSampson,   ///< OPRF: first-order epipolar (Sampson) distance of eq. (25), px^2
-    kReproj,    ///< RANSAC1: reprojection distance of the landmark, px^2
+    kSampson,   ///< OPRF: Sampson distance of eq. (25) with per-point covariances, px^2
+    kReproj,    ///< RANSAC1: reprojection distance r^T S^-1 r of the landmark (chi2(2))
     kTransfer,  ///< OPRF, degenerate motion: rotation-only transfer of the previous pixel, px^2
 };
 
@@ -47,6 +47,10 @@ struct SelectInputs {
     double inv_fy;         ///< 1 / fy (1/px)
     double inv_depth_sum;  ///< sum of 1/depth of the valid matches (1/m)
 };
+
+/// Adds the pixel noise through the distortion of the match's current observation to a
+/// linearized R: R += sigma^2 dC_curr, so R = sigma^2 C_curr + J_L C_L J_L^T.
+void add_pixel_noise(Linearized *lin, double sigma2, const sfd_match_t &m);
 
 /// Builds the scoring model of a current IMU pose (eq. (26)).
 Model make_model(const sfd_ekf_camera_t &cam, const CameraPose &prev, const Mat3 &R_ItoW,

@@ -337,6 +337,37 @@ extern "C" sfd_status_t sfd_camera_distort(const sfd_camera_t *cam, const double
     return SFD_OK;
 }
 
+// Noise of the undistorted pixel from isotropic raw-pixel noise (first order): uv_raw = K d(xn),
+// uv = K xn, so A = d(uv_raw)/d(uv) = K_2 D K_2^-1 (K_2 = diag(fx, fy)), and Cov(uv) = sigma^2
+// A^-1 A^-T (core/docs/camera_model.md "Noise in undistorted pixels").
+extern "C" sfd_status_t sfd_camera_pixel_noise(const sfd_camera_t *cam, const double xn[2],
+                                               float dC[3]) {
+    if (!sfd::camera_valid(cam) || xn == nullptr || dC == nullptr || !sfd::all_finite(xn, 2)) {
+        return SFD_ERR_INVAL;
+    }
+    if (cam->model == SFD_DISTORTION_PINHOLE) {  // A = I: C = I exactly
+        dC[0] = dC[1] = dC[2] = 0.0F;
+        return SFD_OK;
+    }
+    const sfd::Distorted f = sfd::distort_model(*cam, sfd::Vec2(xn[0], xn[1]));
+    const double a00 = f.J(0, 0);
+    const double a01 = f.J(0, 1) * cam->fx_px / cam->fy_px;
+    const double a10 = f.J(1, 0) * cam->fy_px / cam->fx_px;
+    const double a11 = f.J(1, 1);
+    const double det = a00 * a11 - a01 * a10;
+    if (!(std::fabs(det) > 0.0) || !std::isfinite(det)) return SFD_ERR_NUMERIC;
+    // A^-1 = [a11 -a01; -a10 a00] / det; C = A^-1 A^-T.
+    const double i00 = a11 / det, i01 = -a01 / det, i10 = -a10 / det, i11 = a00 / det;
+    const double cxx = i00 * i00 + i01 * i01;
+    const double cxy = i00 * i10 + i01 * i11;
+    const double cyy = i10 * i10 + i11 * i11;
+    if (!std::isfinite(cxx) || !std::isfinite(cxy) || !std::isfinite(cyy)) return SFD_ERR_NUMERIC;
+    dC[0] = static_cast<float>(cxx - 1.0);
+    dC[1] = static_cast<float>(cxy);
+    dC[2] = static_cast<float>(cyy - 1.0);
+    return SFD_OK;
+}
+
 extern "C" sfd_status_t sfd_camera_undistort(const sfd_camera_t *cam, const double uv_px[2],
                                              double xn[2], double J_xn_uv[4]) {
     if (xn == nullptr) return SFD_ERR_INVAL;

@@ -146,12 +146,15 @@ bool hartley_normalization(const double (*x)[2], const int32_t *idx, int32_t n, 
     return true;
 }
 
-/// inlier[i] = (Sampson distance of match i <= threshold); returns the count.
-int32_t score(const double *F, const double (*x_prev)[2], const double (*x_curr)[2], int32_t n,
-              double threshold_sq_px2, uint8_t *inlier) {
+/// inlier[i] = (Sampson distance of match i, with its pixel-noise covariances when @p noise is
+/// given, <= threshold); returns the count.
+int32_t score(const double *F, const double (*x_prev)[2], const double (*x_curr)[2],
+              const sfd_pixel_noise_t *noise, int32_t n, double threshold_sq_px2, uint8_t *inlier) {
     int32_t count = 0;
     for (int32_t i = 0; i < n; ++i) {
-        const bool in = sfd::sampson_px2(F, x_prev[i], x_curr[i]) <= threshold_sq_px2;
+        const float *dc1 = (noise != nullptr) ? noise[i].prev_dC : nullptr;
+        const float *dc2 = (noise != nullptr) ? noise[i].curr_dC : nullptr;
+        const bool in = sfd::sampson_px2(F, x_prev[i], x_curr[i], dc1, dc2) <= threshold_sq_px2;
         inlier[i] = in ? 1U : 0U;
         count += in ? 1 : 0;
     }
@@ -262,8 +265,18 @@ extern "C" double sfd_sampson_sq_px2(const double F[9], const double x_prev[2],
     return sfd::sampson_px2(F, x_prev, x_curr);
 }
 
+// The same with per-point noise covariances: e^2 / (g1^T C1 g1 + g2^T C2 g2) (sampson.hpp).
+extern "C" double sfd_sampson_cov_sq_px2(const double F[9], const double x_prev[2],
+                                         const double x_curr[2], const sfd_pixel_noise_t *noise) {
+    if (F == nullptr || x_prev == nullptr || x_curr == nullptr || noise == nullptr) {
+        return std::numeric_limits<double>::infinity();
+    }
+    return sfd::sampson_px2(F, x_prev, x_curr, noise->prev_dC, noise->curr_dC);
+}
+
 // Table 2, with the hypothesis count of eq. (27) and a final least-squares refit (sfd addition).
-extern "C" sfd_status_t sfd_ransacf(const double (*x_prev)[2], const double (*x_curr)[2], int32_t n,
+extern "C" sfd_status_t sfd_ransacf(const double (*x_prev)[2], const double (*x_curr)[2],
+                                    const sfd_pixel_noise_t *noise, int32_t n,
                                     double threshold_sq_px2, double confidence,
                                     int32_t max_hypotheses, sfd_prng_t *rng, uint8_t *inlier,
                                     sfd_ransacf_result_t *out) {
@@ -279,6 +292,7 @@ extern "C" sfd_status_t sfd_ransacf(const double (*x_prev)[2], const double (*x_
     if (n > SFD_MAX_FEATURES || max_hypotheses > SFD_MAX_HYPOTHESES) return SFD_ERR_CAPACITY;
     for (int32_t i = 0; i < n; ++i) {
         if (!sfd::all_finite(x_prev[i], 2) || !sfd::all_finite(x_curr[i], 2)) return SFD_ERR_INVAL;
+        if (noise != nullptr && !sfd::pixel_noise_valid(noise[i])) return SFD_ERR_INVAL;
     }
     *out = sfd_ransacf_result_t{};
     for (int32_t i = 0; i < n; ++i) inlier[i] = 0U;
@@ -308,7 +322,7 @@ extern "C" sfd_status_t sfd_ransacf(const double (*x_prev)[2], const double (*x_
             perm[j] = tmp;
         }
         if (sfd_fundamental_8point(x_prev, x_curr, perm, kSample, F) != SFD_OK) continue;
-        const int32_t count = score(F, x_prev, x_curr, n, threshold_sq_px2, cur);
+        const int32_t count = score(F, x_prev, x_curr, noise, n, threshold_sq_px2, cur);
         if (count > best) {  // strictly more: the first of equal hypotheses wins
             best = count;
             for (int32_t i = 0; i < n; ++i) inlier[i] = cur[i];
@@ -332,7 +346,7 @@ extern "C" sfd_status_t sfd_ransacf(const double (*x_prev)[2], const double (*x_
             if (inlier[i] != 0U) perm[m++] = i;
         }
         if (sfd_fundamental_8point(x_prev, x_curr, perm, m, F) == SFD_OK) {
-            const int32_t count = score(F, x_prev, x_curr, n, threshold_sq_px2, cur);
+            const int32_t count = score(F, x_prev, x_curr, noise, n, threshold_sq_px2, cur);
             if (count >= best) {
                 best = count;
                 for (int32_t i = 0; i < n; ++i) inlier[i] = cur[i];
@@ -353,7 +367,8 @@ sfd_status_t ransacf_select(sfd_assoc_t *a, const SelectInputs &in, sfd_assoc_re
     a->stage = SFD_STAGE_RANSAC_F;
     sfd_ransacf_result_t rf;
     // cur[] holds the compacted inlier flags of the nv valid matches.
-    const sfd_status_t st = sfd_ransacf(a->x_prev, a->x_curr, nv, a->chi2_1 * in.sigma2,
+    sfd_assoc_ransacf_work_t &w = a->work.ransacf;
+    const sfd_status_t st = sfd_ransacf(w.x_prev, w.x_curr, w.noise, nv, a->chi2_1 * in.sigma2,
                                         prm.confidence, prm.max_hypotheses, &a->rng, a->cur, &rf);
     if (st == SFD_ERR_RANGE || st == SFD_ERR_NUMERIC) {
         // fewer than 8 matches, or every sample degenerate: nothing can be judged
@@ -367,7 +382,8 @@ sfd_status_t ransacf_select(sfd_assoc_t *a, const SelectInputs &in, sfd_assoc_re
     for (int32_t k = 0; k < nv; ++k) {
         const int32_t i = a->valid_idx[k];
         a->best[i] = a->cur[k];
-        const double d = sampson_px2(rf.F, a->x_prev[k], a->x_curr[k]);
+        const double d =
+            sampson_px2(rf.F, w.x_prev[k], w.x_curr[k], w.noise[k].prev_dC, w.noise[k].curr_dC);
         a->best_stat[i] = static_cast<float>(std::fmin(d / in.sigma2, 3.0e38));
     }
     return SFD_OK;

@@ -408,6 +408,17 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
         m->prev_uv_px[0] = nav->prev_uv[p][0];
         m->prev_uv_px[1] = nav->prev_uv[p][1];
         if (sfd_landmark_to_obs(&nav->map, li, nav->uv[i], &m->obs) != SFD_OK) continue;
+        /* The pixel noise of both observations through the distortion Jacobian (C = I + dC,
+         * sfd_camera_pixel_noise()): the previous one's from its undistorted pixel, recomputed
+         * here instead of kept per feature (the camera is the same: a new calibration drops the
+         * previous frame). A flagged observation of a known landmark was replaced by where the
+         * landmark projects; the noise model there is taken at that pixel. */
+        const double xn_prev[2] = {(m->prev_uv_px[0] - cam->cx_px) / cam->fx_px,
+                                   (m->prev_uv_px[1] - cam->cy_px) / cam->fy_px};
+        if (sfd_camera_pixel_noise(cam, xn_prev, m->noise.prev_dC) != SFD_OK ||
+            sfd_camera_pixel_noise(cam, nav->xn[i], m->noise.curr_dC) != SFD_OK) {
+            continue;
+        }
         nav->match_feature[nav->num_matches] = i;
         nav->feature_match[i] = nav->num_matches;
         nav->num_matches++;

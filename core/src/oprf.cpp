@@ -16,32 +16,48 @@ namespace {
 constexpr int32_t kScaleMinMatches = 16;
 constexpr double kChi2Dof1Median = 0.454936423119572;
 
-/// Single-precision form of eq. (25) in normalized coordinates (see sampson_count_packed()): the
-/// residual e = x~_prev^T E x~_curr and the Sampson denominator weighted per axis,
-/// wx (g0^2 + h0^2) + wy (g1^2 + h1^2) with g = E x~_curr, h = E^T x~_prev.
-inline void sampson_terms_f(const float *E, float u1, float v1, float u2, float v2, float wx,
-                            float wy, float *e, float *den) {
+/// Per-axis weights of the packed Sampson denominator: wx = w / fx^2, wy = w / fy^2,
+/// wxy = w / (fx fy) for a common factor w (the threshold or 1).
+struct AxisWeights {
+    float wx, wy, wxy;
+};
+
+/// Single-precision form of eq. (25) with per-point covariances, in normalized coordinates (see
+/// sampson_count_packed()) for packed match @p j of @p w: the residual e = x~_prev^T E x~_curr and
+/// the first-order variance of e in pixel units (sampson.hpp), g_px^T C_prev g_px + h_px^T C_curr
+/// h_px with g = E x~_curr = de/dx~_prev, h = E^T x~_prev = de/dx~_curr, g_px = (g0 / fx,
+/// g1 / fy) (likewise h) and C = I + dC: the isotropic part wx (g0^2 + h0^2) + wy (g1^2 + h1^2)
+/// plus the excess wx (dCp_xx g0^2 + dCc_xx h0^2) + wy (dCp_yy g1^2 + dCc_yy h1^2) +
+/// 2 wxy (dCp_xy g0 g1 + dCc_xy h0 h1), added last so that dC = 0 leaves it bit-for-bit.
+inline void sampson_terms_f(const float *E, const sfd_assoc_oprf_work_t &w, int32_t j,
+                            const AxisWeights &aw, float *e, float *den) {
+    const float u1 = w.nx_prev_u[j], v1 = w.nx_prev_v[j];
+    const float u2 = w.nx_curr_u[j], v2 = w.nx_curr_v[j];
     const float g0 = E[0] * u2 + E[1] * v2 + E[2];
     const float g1 = E[3] * u2 + E[4] * v2 + E[5];
     const float g2 = E[6] * u2 + E[7] * v2 + E[8];
     const float h0 = E[0] * u1 + E[3] * v1 + E[6];
     const float h1 = E[1] * u1 + E[4] * v1 + E[7];
     *e = u1 * g0 + v1 * g1 + g2;
-    *den = wx * (g0 * g0 + h0 * h0) + wy * (g1 * g1 + h1 * h1);
+    const float excess = aw.wx * (w.dc_prev_xx[j] * g0 * g0 + w.dc_curr_xx[j] * h0 * h0) +
+                         aw.wy * (w.dc_prev_yy[j] * g1 * g1 + w.dc_curr_yy[j] * h1 * h1) +
+                         2.0F * aw.wxy * (w.dc_prev_xy[j] * g0 * g1 + w.dc_curr_xy[j] * h0 * h1);
+    *den = aw.wx * (g0 * g0 + h0 * h0) + aw.wy * (g1 * g1 + h1 * h1) + excess;
 }
 
 /// Counts the inliers of one OPRF hypothesis among the packed valid matches: the Sampson distance
-/// of eq. (25) in px^2 is at most @p thr_px2. It is evaluated in normalized coordinates x~ = K^-1
+/// of eq. (25) with per-point covariances, in px^2, is at most thr_px2 (@p thr holds thr_px2 /
+/// fx^2, thr_px2 / fy^2, thr_px2 / (fx fy)). It is evaluated in normalized coordinates x~ = K^-1
 /// x, where F = K^-T E K^-1 gives the same residual e = x~_prev^T E x~_curr and the pixel Sampson
-/// denominator |(F x_curr)_12|^2 + |(F^T x_prev)_12|^2 = (g0^2 + h0^2) / fx^2 + (g1^2 + h1^2) /
-/// fy^2 with g = E x~_curr, h = E^T x~_prev; the test e^2 <= thr (...) needs no division and, E
+/// denominator g_px^T C_prev g_px + h_px^T C_curr h_px of sampson_terms_f() (for C = I:
+/// (g0^2 + h0^2) / fx^2 + (g1^2 + h1^2) / fy^2); the test e^2 <= thr (...) needs no division and, E
 /// being scaled to unit largest entry, is well conditioned in single precision. Blocks of
 /// SFD_ASSOC_SCORE_BLOCK matches are scored together (vectorizable; the NaN padding is never an
 /// inlier). Stops early, returning a count below @p need, once even all remaining matches could not
 /// reach @p need: only a hypothesis with more inliers than the best so far matters. Single
 /// precision only ranks the hypotheses: the verdicts of the chosen one are computed in double
 /// precision with sampson_px2().
-int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], float thr_u, float thr_v,
+int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], const AxisWeights &thr,
                              int32_t nv, int32_t need) {
     constexpr int32_t kBlock = SFD_ASSOC_SCORE_BLOCK;
     float Ek[9];  // a local copy: provably not aliased by the loop, so it stays in registers
@@ -49,15 +65,11 @@ int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], float thr_u
     int32_t count = 0;
     for (int32_t k0 = 0; k0 < nv; k0 += kBlock) {
         if (count + (nv - k0) < need) return count;
-        const float *u1 = a->nx_prev_u + k0;
-        const float *v1 = a->nx_prev_v + k0;
-        const float *u2 = a->nx_curr_u + k0;
-        const float *v2 = a->nx_curr_v + k0;
         int32_t block_count = 0;
-        for (int32_t j = 0; j < kBlock; ++j) {
+        for (int32_t j = k0; j < k0 + kBlock; ++j) {
             float e = 0.0F;
             float rhs = 0.0F;
-            sampson_terms_f(Ek, u1[j], v1[j], u2[j], v2[j], thr_u, thr_v, &e, &rhs);
+            sampson_terms_f(Ek, a->work.oprf, j, thr, &e, &rhs);
             const int32_t in =
                 static_cast<int32_t>(e * e <= rhs) & static_cast<int32_t>(rhs > 0.0F);
             block_count += in;
@@ -70,21 +82,17 @@ int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], float thr_u
 /// The Sampson distance of eq. (25) of every packed valid match under @p E, in units of sigma^2
 /// (the same normalized-coordinate form and precision as sampson_count_packed()), into
 /// a.packed_stat; 3e38 where the denominator vanishes or the value is not finite.
-void sampson_stat_packed(sfd_assoc_t *a, const float E[9], float inv_fx2, float inv_fy2,
+void sampson_stat_packed(sfd_assoc_t *a, const float E[9], const AxisWeights &inv_f2,
                          float inv_sigma2, int32_t nv) {
     constexpr int32_t kBlock = SFD_ASSOC_SCORE_BLOCK;
     float Ek[9];
     for (int k = 0; k < 9; ++k) Ek[k] = E[k];
     for (int32_t k0 = 0; k0 < nv; k0 += kBlock) {
-        const float *u1 = a->nx_prev_u + k0;
-        const float *v1 = a->nx_prev_v + k0;
-        const float *u2 = a->nx_curr_u + k0;
-        const float *v2 = a->nx_curr_v + k0;
-        float *stat = a->packed_stat + k0;
-        for (int32_t j = 0; j < kBlock; ++j) {
+        float *stat = a->work.oprf.packed_stat;
+        for (int32_t j = k0; j < k0 + kBlock; ++j) {
             float e = 0.0F;
             float den = 0.0F;
-            sampson_terms_f(Ek, u1[j], v1[j], u2[j], v2[j], inv_fx2, inv_fy2, &e, &den);
+            sampson_terms_f(Ek, a->work.oprf, j, inv_f2, &e, &den);
             const float d = (e * e * inv_sigma2) / den;
             stat[j] = (d <= 3.0e38F) ? d : 3.0e38F;  // den = 0 gives Inf or NaN: 3e38
         }
@@ -168,7 +176,9 @@ int32_t gate_innovations(sfd_assoc_t *a, const sfd_ekf_t &ekf, const sfd_ekf_cam
         if (set[i] == 0U) continue;
         Linearized lin;
         double d2 = std::numeric_limits<double>::infinity();
-        if (!lz.linearize(m[i].obs, &lin) || !passes_gate(*a, lin, Lss, &d2)) {
+        const bool ok = lz.linearize(m[i].obs, &lin);
+        if (ok) add_pixel_noise(&lin, cam.pixel_sigma_px * cam.pixel_sigma_px, m[i]);
+        if (!ok || !passes_gate(*a, lin, Lss, &d2)) {
             set[i] = 0U;
             a->best_stat[i] = static_cast<float>(std::fmin(d2, 3.0e38));
             ++removed;
@@ -196,8 +206,9 @@ void oprf_select(sfd_assoc_t *a, const SelectInputs &in, sfd_assoc_result_t *out
     const Mat6 Pss = pose_covariance(in.ekf);
     // The Sampson scoring runs over the packed pixel arrays of the valid matches.
     const double thr_sampson = a->chi2_1 * in.sigma2;
-    const float thr_u = static_cast<float>(thr_sampson * in.inv_fx * in.inv_fx);
-    const float thr_v = static_cast<float>(thr_sampson * in.inv_fy * in.inv_fy);
+    const AxisWeights thr{static_cast<float>(thr_sampson * in.inv_fx * in.inv_fx),
+                          static_cast<float>(thr_sampson * in.inv_fy * in.inv_fy),
+                          static_cast<float>(thr_sampson * in.inv_fx * in.inv_fy)};
     Model best_model{};
     int32_t best_count = -1;
     int32_t needed = prm.max_hypotheses;  // line 1: "a big value"
@@ -209,7 +220,7 @@ void oprf_select(sfd_assoc_t *a, const SelectInputs &in, sfd_assoc_result_t *out
             continue;  // a failed hypothesis still counts against the budget
         }
         const Model model = make_model(in.cam, in.prev, R_h, p_h, Parts::kEpipolarOnly);
-        const int32_t count = sampson_count_packed(a, model.E, thr_u, thr_v, nv, best_count + 1);
+        const int32_t count = sampson_count_packed(a, model.E, thr, nv, best_count + 1);
         if (count > best_count) {  // line 6
             best_count = count;
             best_model = model;
@@ -219,15 +230,16 @@ void oprf_select(sfd_assoc_t *a, const SelectInputs &in, sfd_assoc_result_t *out
         }
     }
     if (best_count >= 0) {  // verdicts and statistics of the best hypothesis
-        sampson_stat_packed(a, best_model.E, static_cast<float>(in.inv_fx * in.inv_fx),
-                            static_cast<float>(in.inv_fy * in.inv_fy),
-                            static_cast<float>(1.0 / in.sigma2), nv);
+        const AxisWeights inv_f2{static_cast<float>(in.inv_fx * in.inv_fx),
+                                 static_cast<float>(in.inv_fy * in.inv_fy),
+                                 static_cast<float>(in.inv_fx * in.inv_fy)};
+        sampson_stat_packed(a, best_model.E, inv_f2, static_cast<float>(1.0 / in.sigma2), nv);
         // Noise scale (core/docs/association.md "Noise scale"): the hypothesis' pose error
         // and a pixel_sigma_px that is off both change every distance; the median over the
         // matches, over the chi2(1) median 0.4549, measures it (robust while at most half
         // are spurious); kept within [1/25, 25], 1 below 16 matches.
         if (nv >= kScaleMinMatches) {
-            for (int32_t k = 0; k < nv; ++k) a->cur_stat[k] = a->packed_stat[k];
+            for (int32_t k = 0; k < nv; ++k) a->cur_stat[k] = a->work.oprf.packed_stat[k];
             const double s = median_in_place(a->cur_stat, nv) / kChi2Dof1Median;
             a->sampson_scale = (s < 0.04) ? 0.04 : ((s > 25.0) ? 25.0 : s);
         }
@@ -236,7 +248,7 @@ void oprf_select(sfd_assoc_t *a, const SelectInputs &in, sfd_assoc_result_t *out
         best_count = 0;
         for (int32_t k = 0; k < nv; ++k) {
             const int32_t i = a->valid_idx[k];
-            const float d = a->packed_stat[k] * inv_scale;
+            const float d = a->work.oprf.packed_stat[k] * inv_scale;
             a->best[i] = (d <= chi2_1) ? 1U : 0U;
             best_count += a->best[i];
             a->best_stat[i] = d;

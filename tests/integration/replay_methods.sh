@@ -56,7 +56,12 @@ for m in ["oprf", "ransac1", "both"]:
     j = s[m]["by_kind"]["jump"]
     share = 0.8 if m == "both" else 0.45
     assert j["detected"] > share * (j["spurious"] - j["untested"]), (m, j)
-    assert j["recall"] > 0.4 and s[m]["recall_tested"] > 0.4, (m, s[m])
+    # Tested recall over all kinds: 0.38 for oprf since its noise is carried through the
+    # distortion Jacobian (issue 17 item 4): its false alarms fell from 2.2 % to 0.5 % and with
+    # them the slow drifts it "found" at the image edges (drift recall 0.051 -> 0.036; tested
+    # recall 0.402 -> 0.395, jump recall unchanged at 0.49).
+    floor = 0.38 if m == "oprf" else 0.4
+    assert j["recall"] > 0.4 and s[m]["recall_tested"] > floor, (m, s[m])
 c = collections.Counter()
 for ev in lcm.EventLog(f"{d}/oprf.lcmlog", "r"):
     c[ev.channel] += 1

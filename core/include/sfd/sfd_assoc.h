@@ -13,6 +13,7 @@
 #ifndef SFD_ASSOC_H
 #define SFD_ASSOC_H
 #include <stdint.h>
+#include "sfd_camera.h"
 #include "sfd_config.h"
 #include "sfd_ekf.h"
 #include "sfd_params.h"
@@ -23,10 +24,13 @@ extern "C" {
 #endif
 
 /** One correspondence: the previous frame's observation of a track and the current one, with
- *  the track's landmark (sfd_ekf_obs_t carries the current undistorted pixel and the landmark). */
+ *  the track's landmark (sfd_ekf_obs_t carries the current undistorted pixel and the landmark)
+ *  and the pixel noise of both observations through the distortion (zero: isotropic). */
 typedef struct {
-    double prev_uv_px[2]; /**< undistorted pixel in the previous frame */
-    sfd_ekf_obs_t obs;    /**< current undistorted pixel + landmark (world) with covariance */
+    double prev_uv_px[2];    /**< undistorted pixel in the previous frame */
+    sfd_ekf_obs_t obs;       /**< current undistorted pixel + landmark (world) with covariance */
+    sfd_pixel_noise_t noise; /**< covariances of both pixels in units of sigma^2, minus I
+                                  (sfd_camera_pixel_noise()); all zero = isotropic sigma^2 I */
 } sfd_match_t;
 
 /** Block width of OPRF's hypothesis scoring (floats scored together); the packed arrays below
@@ -48,6 +52,36 @@ typedef struct {
     uint64_t seed;           /**< seed of the hypothesis draws */
 } sfd_assoc_params_t;
 
+/** OPRF's hypothesis scoring inputs: the valid matches in normalized image coordinates (K^-1 x)
+ *  and their pixel-noise excess dC (sfd_pixel_noise_t), single precision, structure of arrays,
+ *  padded with NaN to a whole block. */
+typedef struct {
+    float nx_prev_u[SFD_ASSOC_PACKED_CAP];
+    float nx_prev_v[SFD_ASSOC_PACKED_CAP];
+    float nx_curr_u[SFD_ASSOC_PACKED_CAP];
+    float nx_curr_v[SFD_ASSOC_PACKED_CAP];
+    float dc_prev_xx[SFD_ASSOC_PACKED_CAP]; /**< C_prev - I, xx (dimensionless) */
+    float dc_prev_xy[SFD_ASSOC_PACKED_CAP];
+    float dc_prev_yy[SFD_ASSOC_PACKED_CAP];
+    float dc_curr_xx[SFD_ASSOC_PACKED_CAP]; /**< C_curr - I, xx (dimensionless) */
+    float dc_curr_xy[SFD_ASSOC_PACKED_CAP];
+    float dc_curr_yy[SFD_ASSOC_PACKED_CAP];
+    float packed_stat[SFD_ASSOC_PACKED_CAP]; /**< statistic of each packed match (sigma^2 units) */
+} sfd_assoc_oprf_work_t;
+
+/** The fundamental-matrix RANSAC's compacted inputs (sfd_ransacf()). */
+typedef struct {
+    double x_prev[SFD_MAX_FEATURES][2];
+    double x_curr[SFD_MAX_FEATURES][2];
+    sfd_pixel_noise_t noise[SFD_MAX_FEATURES];
+} sfd_assoc_ransacf_work_t;
+
+/** 1-point RANSAC's reprojection covariance per match:
+ *  S = sigma^2 C_curr + J_L C_L J_L^T (px^2; xx, xy, yy). */
+typedef struct {
+    double S_px2[SFD_MAX_FEATURES][3];
+} sfd_assoc_ransac1_work_t;
+
 /** Caller-owned association object: parameters, the seeded generator and the per-frame
  *  workspace (no large arrays on the stack). Initialise with sfd_assoc_init(). */
 typedef struct {
@@ -65,16 +99,12 @@ typedef struct {
     uint8_t rescued[SFD_MAX_FEATURES];
     float cur_stat[SFD_MAX_FEATURES];
     float best_stat[SFD_MAX_FEATURES];
-    double noise_px2[SFD_MAX_FEATURES]; /**< per match: sigma^2 + landmark spread (px^2) */
-    double x_prev[SFD_MAX_FEATURES][2]; /**< compacted inputs of the fundamental-matrix RANSAC */
-    double x_curr[SFD_MAX_FEATURES][2];
-    /* OPRF's hypothesis scoring: the valid matches in normalized image coordinates (K^-1 x),
-     * single precision, structure of arrays, padded with NaN to a whole block */
-    float nx_prev_u[SFD_ASSOC_PACKED_CAP];
-    float nx_prev_v[SFD_ASSOC_PACKED_CAP];
-    float nx_curr_u[SFD_ASSOC_PACKED_CAP];
-    float nx_curr_v[SFD_ASSOC_PACKED_CAP];
-    float packed_stat[SFD_ASSOC_PACKED_CAP]; /**< statistic of each packed match (sigma^2 units) */
+    /** the method's workspace (the method is fixed at init: one member is ever used) */
+    union {
+        sfd_assoc_oprf_work_t oprf;
+        sfd_assoc_ransacf_work_t ransacf;
+        sfd_assoc_ransac1_work_t ransac1;
+    } work;
     /* between sfd_assoc_select() and sfd_assoc_apply() */
     int32_t selected;      /**< 1 after select, 0 after apply */
     int32_t n;             /**< matches of the selected frame */

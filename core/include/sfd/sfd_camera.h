@@ -78,6 +78,29 @@ sfd_status_t sfd_camera_distort(const sfd_camera_t *cam, const double xn[2], dou
 sfd_status_t sfd_camera_undistort(const sfd_camera_t *cam, const double uv_px[2], double xn[2],
                                   double J_xn_uv[4]);
 
+/** Pixel noise of one match beyond the isotropic model, in undistorted pixels: for the previous
+ *  and the current observation, dC = C - I (xx, xy, yy) with C the covariance of the undistorted
+ *  pixel in units of sigma^2 (sfd_camera_pixel_noise()). All zero means isotropic noise sigma^2 I
+ *  in undistorted pixels: exactly the pinhole camera, and what a zero-initialised match assumes.
+ *  Single precision: C only scales a test statistic (relative error ~1e-7). */
+typedef struct {
+    float prev_dC[3]; /**< previous frame: C - I (xx, xy, yy), dimensionless */
+    float curr_dC[3]; /**< current frame: C - I (xx, xy, yy), dimensionless */
+} sfd_pixel_noise_t;
+
+/**
+ * @brief Covariance, in units of sigma^2, of the undistorted pixel uv = K xn when the raw pixel
+ *        carries isotropic noise sigma^2 I, minus the identity (first order):
+ *        A = d(uv_raw)/d(uv) = diag(fx, fy) D diag(1/fx, 1/fy) with D = d(distorted xn)/d(xn),
+ *        C = A^-1 A^-T, dC = C - I. Output as (xx, xy, yy), single precision; exactly zero for
+ *        the pinhole model (A = I).
+ * @param xn  Normalized undistorted coordinates (x/z, y/z) of the feature.
+ * @param dC  Out: C - I (xx, xy, yy).
+ * @return SFD_OK; SFD_ERR_INVAL for null/non-finite input or an invalid camera; SFD_ERR_NUMERIC
+ *         when A is singular or C is not finite (dC untouched).
+ */
+sfd_status_t sfd_camera_pixel_noise(const sfd_camera_t *cam, const double xn[2], float dC[3]);
+
 /**
  * @brief Projects a 3-D point in the camera frame to raw pixels.
  * @param p_FinC  Point (m) in the camera frame.

@@ -18,6 +18,7 @@
 
 #include <stdint.h>
 
+#include "sfd_camera.h"
 #include "sfd_config.h"
 #include "sfd_prng.h"
 #include "sfd_status.h"
@@ -74,6 +75,21 @@ sfd_status_t sfd_fundamental_8point(const double (*x_prev)[2], const double (*x_
  */
 double sfd_sampson_sq_px2(const double F[9], const double x_prev[2], const double x_curr[2]);
 
+/**
+ * @brief Sampson distance with per-point pixel-noise covariances (px^2 in units of the raw pixel
+ *        noise): d = e^2 / (g1^T C1 g1 + g2^T C2 g2), e = x1^T F x2, g1 = (F x2)_12 = de/dx1,
+ *        g2 = (F^T x1)_12 = de/dx2, Ck = I + dCk (sfd_pixel_noise_t, units of sigma^2).
+ *
+ * sigma^2 (g1^T C1 g1 + g2^T C2 g2) is the first-order variance of e when the two pixels carry
+ * independent noise sigma^2 C1 and sigma^2 C2 (isotropic raw-pixel noise carried through the
+ * distortion Jacobian, sfd_camera_pixel_noise()), so d / sigma^2 is approximately chi-square with
+ * 1 dof also at the image edges. dC = 0 gives sfd_sampson_sq_px2() bit-for-bit.
+ *
+ * @return d >= 0; +infinity as sfd_sampson_sq_px2() (also for a null @p noise). Reentrant.
+ */
+double sfd_sampson_cov_sq_px2(const double F[9], const double x_prev[2], const double x_curr[2],
+                              const sfd_pixel_noise_t *noise);
+
 /** Outcome of one sfd_ransacf() call. */
 typedef struct {
     int32_t hypotheses_used;  /**< hypotheses drawn (<= max_hypotheses), degenerate ones included */
@@ -87,7 +103,8 @@ typedef struct {
  *
  * Each hypothesis draws 8 distinct matches (partial Fisher-Yates with sfd_prng_uniform_index),
  * fits F with sfd_fundamental_8point() (a degenerate sample counts as a used hypothesis and is
- * skipped), and counts the matches whose Sampson distance is <= @p threshold_sq_px2. The first
+ * skipped), and counts the matches whose Sampson distance (sfd_sampson_cov_sq_px2() when @p noise
+ * is given) is <= @p threshold_sq_px2. The first
  * hypothesis with the largest count wins; each improvement sets the hypothesis count N by eq. (27)
  * with the inlier ratio best/n and m = 8, never above @p max_hypotheses. sfd addition (not in the
  * thesis): F is refit once by least squares on the winning inlier set and the matches rescored;
@@ -99,6 +116,8 @@ typedef struct {
  *
  * @param x_prev           n undistorted pixel coordinates in the previous frame (px).
  * @param x_curr           n undistorted pixel coordinates in the current frame (px).
+ * @param noise            n pixel-noise covariances (sfd_pixel_noise_t), or NULL for isotropic
+ *                         noise; the Sampson test then uses sfd_sampson_cov_sq_px2().
  * @param n                Number of matches, 0 <= n <= SFD_MAX_FEATURES.
  * @param threshold_sq_px2 Sampson-distance gate (px^2), finite and > 0; see sfd_sampson_sq_px2().
  * @param confidence       p of eq. (27), in (0, 1).
@@ -107,7 +126,8 @@ typedef struct {
  * @param inlier           Out: n flags, 1 = consistent with the final F, 0 = spurious/untested.
  * @param out              Out: counts and the final F.
  * @return SFD_OK; SFD_ERR_INVAL for a null pointer, n < 0, threshold or confidence out of range,
- *         max_hypotheses < 1, or a non-finite coordinate (nothing written);
+ *         max_hypotheses < 1, a non-finite coordinate, or a noise covariance I + dC that is not
+ *         finite and positive definite (nothing written);
  *         SFD_ERR_CAPACITY for n > SFD_MAX_FEATURES or max_hypotheses > SFD_MAX_HYPOTHESES
  *         (nothing written; the same split as sfd_params_validate());
  *         SFD_ERR_RANGE for n < 8: too few matches to fit F, inlier[] all 0 and @p out zeroed
@@ -115,9 +135,10 @@ typedef struct {
  *         SFD_ERR_NUMERIC when every hypothesis was degenerate: inlier[] all 0, out->F zero,
  *         out->hypotheses_used and out->budget_exhausted set (the matches are untested).
  */
-sfd_status_t sfd_ransacf(const double (*x_prev)[2], const double (*x_curr)[2], int32_t n,
-                         double threshold_sq_px2, double confidence, int32_t max_hypotheses,
-                         sfd_prng_t *rng, uint8_t *inlier, sfd_ransacf_result_t *out);
+sfd_status_t sfd_ransacf(const double (*x_prev)[2], const double (*x_curr)[2],
+                         const sfd_pixel_noise_t *noise, int32_t n, double threshold_sq_px2,
+                         double confidence, int32_t max_hypotheses, sfd_prng_t *rng,
+                         uint8_t *inlier, sfd_ransacf_result_t *out);
 
 #ifdef __cplusplus
 }
