@@ -150,10 +150,12 @@ extern "C" sfd_status_t sfd_msckf_track_gate(const sfd_msckf_track_t *t, const d
     double S[kRows][kRows];
     double hp[kDim];
     for (int i = 0; i < m; ++i) {
-        for (int l = lo; l < hi; ++l) {  // (H_o P)_i
-            double v = 0.0;
-            for (int k = lo; k < hi; ++k) v += t->Hx[i][k] * P[k * kDim + l];
-            hp[l] = v;
+        // (H_o P)_i, row by row of P (contiguous; each entry sums over k in the same order)
+        for (int l = lo; l < hi; ++l) hp[l] = 0.0;
+        for (int k = lo; k < hi; ++k) {
+            const double h = t->Hx[i][k];
+            const double *Pk = P + static_cast<std::ptrdiff_t>(k) * kDim;
+            for (int l = lo; l < hi; ++l) hp[l] += h * Pk[l];
         }
         for (int j = 0; j <= i; ++j) {
             double v = 0.0;
@@ -174,31 +176,33 @@ extern "C" sfd_status_t sfd_msckf_track_gate(const sfd_msckf_track_t *t, const d
     return SFD_OK;
 }
 
-extern "C" sfd_status_t sfd_msckf_track_statistic(sfd_msckf_track_t *t, double *gamma,
-                                                  int32_t *dof) {
-    if (t == nullptr || gamma == nullptr || dof == nullptr || t->projected != 0 || t->rows < 4 ||
-        t->rows > kRows) {
+extern "C" sfd_status_t sfd_msckf_track_statistic(const sfd_msckf_track_t *t,
+                                                  const double (*S)[SFD_MSCKF_TRACK_ROWS],
+                                                  double *gamma, int32_t *dof) {
+    if (t == nullptr || S == nullptr || gamma == nullptr || dof == nullptr || t->projected != 0 ||
+        t->rows < 4 || t->rows > kRows) {
         return SFD_ERR_INVAL;
     }
     const int rows = t->rows;
-    // S = L L^T in place of R; w = L^-1 r in place of r; G = L^-1 H_f in place of H_f.
-    if (!la::cholesky(t->R, rows, t->R)) return SFD_ERR_NUMERIC;
-    la::forward_solve(t->R, rows, t->r, t->r);
-    double g[kRows];
+    // S = L L^T; w = L^-1 r; G = L^-1 H_f (column by column).
+    double L[kRows][kRows];
+    if (!la::cholesky(S, rows, L)) return SFD_ERR_NUMERIC;
+    double w[kRows];
+    la::forward_solve(L, rows, t->r, w);
+    double G[3][kRows];
     for (int c = 0; c < 3; ++c) {
-        for (int i = 0; i < rows; ++i) g[i] = t->Hf[i][c];
-        la::forward_solve(t->R, rows, g, g);
-        for (int i = 0; i < rows; ++i) t->Hf[i][c] = g[i];
+        for (int i = 0; i < rows; ++i) G[c][i] = t->Hf[i][c];
+        la::forward_solve(L, rows, G[c], G[c]);
     }
     double A[3][3];  // G^T G
     double b[3];     // G^T w
     for (int c = 0; c < 3; ++c) {
         double v = 0.0;
-        for (int i = 0; i < rows; ++i) v += t->Hf[i][c] * t->r[i];
+        for (int i = 0; i < rows; ++i) v += G[c][i] * w[i];
         b[c] = v;
         for (int d = 0; d <= c; ++d) {
             double a = 0.0;
-            for (int i = 0; i < rows; ++i) a += t->Hf[i][c] * t->Hf[i][d];
+            for (int i = 0; i < rows; ++i) a += G[c][i] * G[d][i];
             A[c][d] = a;
             A[d][c] = a;
         }
@@ -209,7 +213,7 @@ extern "C" sfd_status_t sfd_msckf_track_statistic(sfd_msckf_track_t *t, double *
     double c3[3];
     la::forward_solve(M, la::Dim<3>{}, b, c3);
     double ww = 0.0;
-    for (int i = 0; i < rows; ++i) ww += t->r[i] * t->r[i];
+    for (int i = 0; i < rows; ++i) ww += w[i] * w[i];
     const double g_stat = ww - (c3[0] * c3[0] + c3[1] * c3[1] + c3[2] * c3[2]);
     if (!std::isfinite(g_stat)) return SFD_ERR_NUMERIC;
     *gamma = std::fmax(g_stat, 0.0);  // a perfect fit can round to -eps
@@ -243,12 +247,15 @@ extern "C" sfd_status_t sfd_msckf_stack_fold(sfd_msckf_stack_t *s, const sfd_msc
     // outside H_o's span stay zero).
     double W[kRows][kDim + 1];
     for (int i = 0; i < m; ++i) {
+        // row i minus the earlier whitened rows, row by row (contiguous; each entry subtracts
+        // over k in the same order)
         for (int j = 0; j < n; ++j) W[i][j] = 0.0;
-        for (int j = lo; j < hi; ++j) {
-            double v = t->Hx[i][j];
-            for (int k = 0; k < i; ++k) v -= L[i][k] * W[k][j];
-            W[i][j] = v / L[i][i];
+        for (int j = lo; j < hi; ++j) W[i][j] = t->Hx[i][j];
+        for (int k = 0; k < i; ++k) {
+            const double lik = L[i][k];
+            for (int j = lo; j < hi; ++j) W[i][j] -= lik * W[k][j];
         }
+        for (int j = lo; j < hi; ++j) W[i][j] /= L[i][i];
         double v = t->r[i];
         for (int k = 0; k < i; ++k) v -= L[i][k] * W[k][n];
         W[i][n] = v / L[i][i];
@@ -261,11 +268,12 @@ extern "C" sfd_status_t sfd_msckf_stack_fold(sfd_msckf_stack_t *s, const sfd_msc
     for (int i = 0; i < m; ++i) {
         const double *v = W[i];
         for (int a = lo; a < hi; ++a) {
-            if (!(std::fabs(v[a]) > 0.0)) continue;
+            const double va = v[a];  // a local: the row's stores cannot change it
+            if (!(std::fabs(va) > 0.0)) continue;
             s->used[a] = 1;
             double *row = s->Tq[a];
-            for (int c = a; c < hi; ++c) row[c] += v[a] * v[c];
-            row[n] += v[a] * v[n];
+            for (int c = a; c < hi; ++c) row[c] += va * v[c];
+            row[n] += va * v[n];
         }
         s->residual_ss += v[n] * v[n];
         ++s->folded;

@@ -313,6 +313,43 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
     return true;
 }
 
+/// S += H_x P H_x^T for a residual whose rows each depend on one pose only: frame f's error state
+/// at the columns src[6f .. 6f + 5] of P, through the 6-vector hp[i] (dp, dtheta). Frame pair by
+/// frame pair (f <= g), with P_fg the 6x6 block of the two poses, the rows i of f and j of g
+/// receive hp_i^T P_fg hp_j (and its mirror). frame_rows[f] lists frame f's frame_nrows[f] rows.
+void add_pose_covariance(const sfd_window_t &w, int frames, const int *src, const double (*hp)[6],
+                         const int (*frame_rows)[3], const int *frame_nrows,
+                         double (*S)[SFD_MSCKF_TRACK_ROWS]) {
+    for (int k = 0; k < frames; ++k) {
+        const int *sk = src + static_cast<std::ptrdiff_t>(6) * k;
+        for (int l = k; l < frames; ++l) {
+            const int *sl = src + static_cast<std::ptrdiff_t>(6) * l;
+            double Plk[6][6];  // P_lk = P_kl^T (P is symmetric): row b holds P_kl's column b
+            for (int b = 0; b < 6; ++b) {
+                for (int a = 0; a < 6; ++a) Plk[b][a] = w.P[sl[b]][sk[a]];
+            }
+            double T[3][6];  // P_kl hp_j for the rows j of frame l, summed over b in order
+            for (int jj = 0; jj < frame_nrows[l]; ++jj) {
+                const double *h = hp[frame_rows[l][jj]];
+                for (int a = 0; a < 6; ++a) T[jj][a] = 0.0;
+                for (int b = 0; b < 6; ++b) {
+                    for (int a = 0; a < 6; ++a) T[jj][a] += Plk[b][a] * h[b];
+                }
+            }
+            for (int ii = 0; ii < frame_nrows[k]; ++ii) {
+                const int i = frame_rows[k][ii];
+                for (int jj = (l == k ? ii : 0); jj < frame_nrows[l]; ++jj) {
+                    const int j = frame_rows[l][jj];
+                    double v = 0.0;
+                    for (int a = 0; a < 6; ++a) v += hp[i][a] * T[jj][a];
+                    S[i][j] += v;
+                    if (j != i) S[j][i] += v;
+                }
+            }
+        }
+    }
+}
+
 enum class TrackOutcome { kNoGeometry, kGated, kUsed, kNumeric };
 
 /// The track's residual (1) at the current clones, its Jacobians (at the current clones,
@@ -413,12 +450,39 @@ TrackOutcome process_track(sfd_window_t *w, const sfd_window_track_t &t,
         tr.r[r] = t.depth_m - pc.z();
         tr.R[r][r] = t.depth_var_m2 + w->prm.depth_var_floor_m2;
     }
-    if (sfd_msckf_track_project(&tr) != SFD_OK) return TrackOutcome::kNoGeometry;
+    // The gate (3) from the unprojected track, as sfd_window_test_track computes it: S = H_x P
+    // H_x^T + R from the 6x6 blocks of P the clones' rows touch, gamma by the least-squares
+    // identity (sfd_msckf_track_statistic; equal to projecting, then sfd_msckf_track_gate). The
+    // outcomes keep their order: a failed projection is kNoGeometry, a failed gate kNumeric.
+    double S[SFD_MSCKF_TRACK_ROWS][SFD_MSCKF_TRACK_ROWS];
+    double hp[SFD_MSCKF_TRACK_ROWS][6];
+    int src[6 * SFD_MAX_WINDOW];
+    int frame_rows[SFD_MAX_WINDOW][3];
+    int frame_nrows[SFD_MAX_WINDOW];
+    for (int k = 0; k < t.used; ++k) {
+        const int col = kImu + 6 * (c0 + k);
+        for (int j = 0; j < 6; ++j) src[6 * k + j] = col + j;
+        frame_nrows[k] = 2;
+        for (int a = 0; a < 2; ++a) {
+            const int r = 2 * k + a;
+            frame_rows[k][a] = r;
+            for (int j = 0; j < 6; ++j) hp[r][j] = tr.Hx[r][col + j];
+        }
+    }
+    if (depth_row) {
+        const int r = 2 * t.used;
+        frame_rows[0][frame_nrows[0]++] = r;
+        for (int j = 0; j < 6; ++j) hp[r][j] = tr.Hx[r][kImu + 6 * c0 + j];
+    }
+    for (int i = 0; i < rows; ++i) {
+        for (int j = 0; j < rows; ++j) S[i][j] = tr.R[i][j];
+    }
+    add_pose_covariance(*w, t.used, src, hp, frame_rows, frame_nrows, S);
     double gamma = 0.0;
     int32_t dof = 0;
-    if (sfd_msckf_track_gate(&tr, &w->P[0][0], &gamma, &dof) != SFD_OK) {
-        return TrackOutcome::kNumeric;
-    }
+    const sfd_status_t gate_status = sfd_msckf_track_statistic(&tr, S, &gamma, &dof);
+    if (sfd_msckf_track_project(&tr) != SFD_OK) return TrackOutcome::kNoGeometry;
+    if (gate_status != SFD_OK) return TrackOutcome::kNumeric;
     *gamma_out = gamma;
     *dof_out = dof;
     if (dof < 1 || dof >= SFD_MSCKF_TRACK_ROWS || gamma > w->gate[dof]) return TrackOutcome::kGated;
@@ -974,36 +1038,6 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
         tr.r[r] = t.depth_m - pc.z();
         S[r][r] = t.depth_var_m2 + w->prm.depth_var_floor_m2;
     }
-    // S += H_x P H_x^T, frame pair by frame pair (k <= l): with P_kl the 6x6 block of the two
-    // poses, the rows i of k and j of l receive hp_i^T P_kl hp_j (and its mirror).
-    for (int k = 0; k < m; ++k) {
-        const int *sk = src + static_cast<std::ptrdiff_t>(6) * k;
-        for (int l = k; l < m; ++l) {
-            const int *sl = src + static_cast<std::ptrdiff_t>(6) * l;
-            double Pkl[6][6];
-            for (int a = 0; a < 6; ++a) {
-                for (int b = 0; b < 6; ++b) Pkl[a][b] = w->P[sk[a]][sl[b]];
-            }
-            double T[6][3];  // P_kl hp_j for the rows j of frame l
-            for (int jj = 0; jj < frame_nrows[l]; ++jj) {
-                const double *h = hp[frame_rows[l][jj]];
-                for (int a = 0; a < 6; ++a) {
-                    double v = 0.0;
-                    for (int b = 0; b < 6; ++b) v += Pkl[a][b] * h[b];
-                    T[a][jj] = v;
-                }
-            }
-            for (int ii = 0; ii < frame_nrows[k]; ++ii) {
-                const int i = frame_rows[k][ii];
-                for (int jj = (l == k ? ii : 0); jj < frame_nrows[l]; ++jj) {
-                    const int j = frame_rows[l][jj];
-                    double v = 0.0;
-                    for (int a = 0; a < 6; ++a) v += hp[i][a] * T[a][jj];
-                    S[i][j] += v;
-                    if (j != i) S[j][i] += v;
-                }
-            }
-        }
-    }
-    return sfd_msckf_track_statistic(&tr, gamma, dof);
+    add_pose_covariance(*w, m, src, hp, frame_rows, frame_nrows, S);
+    return sfd_msckf_track_statistic(&tr, tr.R, gamma, dof);
 }

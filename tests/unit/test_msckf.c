@@ -18,7 +18,7 @@
 enum { D = SFD_MSCKF_DIM, TR = SFD_MSCKF_TRACK_ROWS, BIG = 6 * TR };
 _Static_assert(BIG <= TEST_DENSE_MAX && D <= TEST_DENSE_MAX, "test_dense.h's capacity");
 
-static sfd_msckf_track_t g_track, g_copy;
+static sfd_msckf_track_t g_track, g_copy, g_before;
 static sfd_msckf_stack_t g_stack;
 static sfd_msckf_work_t g_work;
 static double g_P[D * D], g_P2[D * D];
@@ -157,7 +157,11 @@ static void gate_equals_the_landmark_eliminated_statistic(void **state) {
         assert_true(fabs(gamma - ref) <= 1e-9 * (1.0 + fabs(ref)));
         double gamma_gls = -1.0;
         int32_t dof_gls = 0;
-        assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma_gls, &dof_gls), SFD_OK);
+        g_before = g_copy;
+        assert_int_equal(
+            sfd_msckf_track_statistic(&g_copy, (const double(*)[TR])g_copy.R, &gamma_gls, &dof_gls),
+            SFD_OK);
+        assert_memory_equal(&g_copy, &g_before, sizeof g_copy); /* the track is only read */
         assert_int_equal(dof_gls, rows - 3);
         assert_true(fabs(gamma_gls - ref) <= 1e-9 * (1.0 + fabs(ref)));
     }
@@ -348,24 +352,39 @@ static void bad_sizes_and_degenerate_landmarks_are_status_codes(void **state) {
     /* The statistic without N: sizes, null, a projected track, and what it overwrites. */
     g_copy = g_track;
     g_copy.rows = TR + 1;
-    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_INVAL);
+    assert_int_equal(
+        sfd_msckf_track_statistic(&g_copy, (const double(*)[TR])g_copy.R, &gamma, &dof),
+        SFD_ERR_INVAL);
     g_copy.rows = 3;
-    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_INVAL);
+    assert_int_equal(
+        sfd_msckf_track_statistic(&g_copy, (const double(*)[TR])g_copy.R, &gamma, &dof),
+        SFD_ERR_INVAL);
     g_copy.rows = 6;
-    assert_int_equal(sfd_msckf_track_statistic(NULL, &gamma, &dof), SFD_ERR_INVAL);
-    assert_int_equal(sfd_msckf_track_statistic(&g_copy, NULL, &dof), SFD_ERR_INVAL);
+    assert_int_equal(sfd_msckf_track_statistic(NULL, (const double(*)[TR])g_copy.R, &gamma, &dof),
+                     SFD_ERR_INVAL);
+    assert_int_equal(sfd_msckf_track_statistic(&g_copy, NULL, &gamma, &dof), SFD_ERR_INVAL);
+    assert_int_equal(sfd_msckf_track_statistic(&g_copy, (const double(*)[TR])g_copy.R, NULL, &dof),
+                     SFD_ERR_INVAL);
     g_copy.projected = 1;
-    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_INVAL);
+    assert_int_equal(
+        sfd_msckf_track_statistic(&g_copy, (const double(*)[TR])g_copy.R, &gamma, &dof),
+        SFD_ERR_INVAL);
     g_copy.projected = 0;
     g_copy.r[1] = NAN;
-    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_NUMERIC);
+    assert_int_equal(
+        sfd_msckf_track_statistic(&g_copy, (const double(*)[TR])g_copy.R, &gamma, &dof),
+        SFD_ERR_NUMERIC);
     g_copy = g_track;
     g_copy.R[0][0] = -1.0; /* not positive definite */
-    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_NUMERIC);
+    assert_int_equal(
+        sfd_msckf_track_statistic(&g_copy, (const double(*)[TR])g_copy.R, &gamma, &dof),
+        SFD_ERR_NUMERIC);
     /* Rank 2 (no parallax: every row's landmark direction in one plane). */
     for (int i = 0; i < 6; ++i) g_track.Hf[i][2] = 2.0 * g_track.Hf[i][0] - g_track.Hf[i][1];
     g_copy = g_track;
-    assert_int_equal(sfd_msckf_track_statistic(&g_copy, &gamma, &dof), SFD_ERR_NUMERIC);
+    assert_int_equal(
+        sfd_msckf_track_statistic(&g_copy, (const double(*)[TR])g_copy.R, &gamma, &dof),
+        SFD_ERR_NUMERIC);
     assert_int_equal(sfd_msckf_track_project(&g_track), SFD_ERR_NUMERIC);
     assert_int_equal(g_track.projected, 0);
     /* Fold into a stack of another dimension. */

@@ -96,26 +96,28 @@ sfd_status_t sfd_msckf_track_gate(const sfd_msckf_track_t *track, const double *
                                   int32_t *dof);
 
 /**
- * @brief Eq. (3) without forming N, for a track whose pose uncertainty is already in its noise
- *        (R = H_x P H_x^T + R_pixel, rows x rows, SPD; Hx is not read): for any N spanning the
- *        left null space of H_f (rank 3),
- *            r^T N (N^T R N)^-1 N^T r = r^T R^-1 r - b^T A^-1 b,  A = H_f^T R^-1 H_f,
- *            b = H_f^T R^-1 r,
- *        the residual of the weighted least-squares fit of the point. With R = L L^T,
+ * @brief Eq. (3) without forming N, from the track's residual covariance with the poses' part
+ *        in it, S = H_x P H_x^T + R (rows x rows, SPD; the caller forms it, e.g. from the blocks
+ *        of P its rows touch): for any N spanning the left null space of H_f (rank 3),
+ *            r^T N (N^T S N)^-1 N^T r = r^T S^-1 r - b^T A^-1 b,  A = H_f^T S^-1 H_f,
+ *            b = H_f^T S^-1 r,
+ *        the residual of the weighted least-squares fit of the point. With S = L L^T,
  *        w = L^-1 r, G = L^-1 H_f and G^T G = M M^T: gamma = |w|^2 - |M^-1 G^T w|^2, chi2(rows - 3)
- *        for a consistent track. About a third of the work of sfd_msckf_track_project() and
- *        sfd_msckf_track_gate() on the same track (the per-feature parity test of
- *        sfd_window_test_track uses it); equal to them up to rounding (unit.msckf).
- * @return SFD_OK with gamma >= 0 and dof = rows - 3; the track's R, r and H_f are overwritten
- *         by L, w and G (it cannot be projected afterwards). SFD_ERR_INVAL for null, a projected
- *         track or rows outside 4..SFD_MSCKF_TRACK_ROWS (nothing written); SFD_ERR_NUMERIC when
- *         R is not positive definite, H_f has rank below 3 (a pivot of A below 1e-14 of its
- *         largest diagonal entry: A is formed from squares, so it cannot resolve the 1e-18 that
- *         sfd_msckf_track_project()'s 1e-9 on H_f's triangular factor would be; the tracks of a
- *         window filter are far from either, their triangulation needs parallax or a depth
- *         prior) or an input is not finite.
+ *        for a consistent track; equal to sfd_msckf_track_project() then sfd_msckf_track_gate()
+ *        up to rounding (unit.msckf), at a fraction of their work. Reads rows, H_f and r of the
+ *        unprojected @p track (Hx and R are not read; nothing is written to it).
+ * @param S row stride SFD_MSCKF_TRACK_ROWS, rows x rows, lower triangle read.
+ * @return SFD_OK with gamma >= 0 and dof = rows - 3; SFD_ERR_INVAL for null, a projected track
+ *         or rows outside 4..SFD_MSCKF_TRACK_ROWS; SFD_ERR_NUMERIC when S is not positive
+ *         definite, H_f has rank below 3 (a pivot of A below 1e-14 of its largest diagonal
+ *         entry: A is formed from squares, so it cannot resolve the 1e-18 that
+ *         sfd_msckf_track_project()'s 1e-9 on H_f's triangular factor would be; a window
+ *         filter's tracks are far from either, their triangulation needs parallax or a depth
+ *         prior) or an input is not finite (*gamma, *dof unchanged).
  */
-sfd_status_t sfd_msckf_track_statistic(sfd_msckf_track_t *track, double *gamma, int32_t *dof);
+sfd_status_t sfd_msckf_track_statistic(const sfd_msckf_track_t *track,
+                                       const double (*S)[SFD_MSCKF_TRACK_ROWS], double *gamma,
+                                       int32_t *dof);
 
 /** @brief Empties the compression for an n-dimensional error state (1..SFD_MSCKF_DIM). */
 sfd_status_t sfd_msckf_stack_reset(sfd_msckf_stack_t *stack, int32_t n);
