@@ -314,26 +314,30 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
 }
 
 /// S += H_x P H_x^T for a residual whose rows each depend on one pose only: frame f's error state
-/// at the columns src[6f .. 6f + 5] of P, through the 6-vector hp[i] (dp, dtheta). Frame pair by
-/// frame pair (f <= g), with P_fg the 6x6 block of the two poses, the rows i of f and j of g
-/// receive hp_i^T P_fg hp_j (and its mirror). frame_rows[f] lists frame f's frame_nrows[f] rows.
-void add_pose_covariance(const sfd_window_t &w, int frames, const int *src, const double (*hp)[6],
-                         const int (*frame_rows)[3], const int *frame_nrows,
+/// (dp, dtheta) at the columns cols[f][0] .. + 2 and cols[f][1] .. + 2 of P, through the 6-vector
+/// hp[i]. Frame pair by frame pair (f <= g), with P_fg the 6x6 block of the two poses (read in
+/// place, rows of P_gf = P_fg^T), the rows i of f and j of g receive hp_i^T P_fg hp_j (and its
+/// mirror). frame_rows[f] lists frame f's frame_nrows[f] rows.
+void add_pose_covariance(const sfd_window_t &w, int frames, const int (*cols)[2],
+                         const double (*hp)[6], const int (*frame_rows)[3], const int *frame_nrows,
                          double (*S)[SFD_MSCKF_TRACK_ROWS]) {
     for (int k = 0; k < frames; ++k) {
-        const int *sk = src + static_cast<std::ptrdiff_t>(6) * k;
+        const int kp = cols[k][0], kt = cols[k][1];
         for (int l = k; l < frames; ++l) {
-            const int *sl = src + static_cast<std::ptrdiff_t>(6) * l;
-            double Plk[6][6];  // P_lk = P_kl^T (P is symmetric): row b holds P_kl's column b
-            for (int b = 0; b < 6; ++b) {
-                for (int a = 0; a < 6; ++a) Plk[b][a] = w.P[sl[b]][sk[a]];
+            const double *Prow[6];  // row b of P_lk = P_kl^T: P's row of l's state b, k's columns
+            for (int b = 0; b < 3; ++b) {
+                Prow[b] = w.P[cols[l][0] + b];
+                Prow[3 + b] = w.P[cols[l][1] + b];
             }
             double T[3][6];  // P_kl hp_j for the rows j of frame l, summed over b in order
             for (int jj = 0; jj < frame_nrows[l]; ++jj) {
                 const double *h = hp[frame_rows[l][jj]];
                 for (int a = 0; a < 6; ++a) T[jj][a] = 0.0;
                 for (int b = 0; b < 6; ++b) {
-                    for (int a = 0; a < 6; ++a) T[jj][a] += Plk[b][a] * h[b];
+                    const double hb = h[b];
+                    const double *pb = Prow[b];
+                    for (int a = 0; a < 3; ++a) T[jj][a] += pb[kp + a] * hb;
+                    for (int a = 0; a < 3; ++a) T[jj][3 + a] += pb[kt + a] * hb;
                 }
             }
             for (int ii = 0; ii < frame_nrows[k]; ++ii) {
@@ -456,12 +460,13 @@ TrackOutcome process_track(sfd_window_t *w, const sfd_window_track_t &t,
     // outcomes keep their order: a failed projection is kNoGeometry, a failed gate kNumeric.
     double S[SFD_MSCKF_TRACK_ROWS][SFD_MSCKF_TRACK_ROWS];
     double hp[SFD_MSCKF_TRACK_ROWS][6];
-    int src[6 * SFD_MAX_WINDOW];
+    int cols[SFD_MAX_WINDOW][2];
     int frame_rows[SFD_MAX_WINDOW][3];
     int frame_nrows[SFD_MAX_WINDOW];
     for (int k = 0; k < t.used; ++k) {
         const int col = kImu + 6 * (c0 + k);
-        for (int j = 0; j < 6; ++j) src[6 * k + j] = col + j;
+        cols[k][0] = col;
+        cols[k][1] = col + 3;
         frame_nrows[k] = 2;
         for (int a = 0; a < 2; ++a) {
             const int r = 2 * k + a;
@@ -477,7 +482,7 @@ TrackOutcome process_track(sfd_window_t *w, const sfd_window_track_t &t,
     for (int i = 0; i < rows; ++i) {
         for (int j = 0; j < rows; ++j) S[i][j] = tr.R[i][j];
     }
-    add_pose_covariance(*w, t.used, src, hp, frame_rows, frame_nrows, S);
+    add_pose_covariance(*w, t.used, cols, hp, frame_rows, frame_nrows, S);
     double gamma = 0.0;
     int32_t dof = 0;
     const sfd_status_t gate_status = sfd_msckf_track_statistic(&tr, S, &gamma, &dof);
@@ -963,8 +968,8 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
     CamPose pose[SFD_MAX_WINDOW];
     Vec3 p_I[SFD_MAX_WINDOW];
     Mat3 R_I[SFD_MAX_WINDOW];
-    // The poses' error state: (dp, dtheta) of frame k, at columns src[6k..6k+5] of P.
-    int src[6 * SFD_MAX_WINDOW];
+    // The poses' error state: dp and dtheta of frame k at columns cols[k][0], cols[k][1] (+0..2).
+    int cols[SFD_MAX_WINDOW][2];
     for (int k = 0; k < m; ++k) {
         const bool cur = (k == m - 1);
         const double *q = cur ? w->q_ItoW : w->clones[c0 + k].q_ItoW;
@@ -973,10 +978,8 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
         pose[k] = cam_pose(R_I[k], p_I[k], *ext);
         const int cp = cur ? P_ : kImu + 6 * (c0 + k);
         const int ct = cur ? TH : kImu + 6 * (c0 + k) + 3;
-        for (int j = 0; j < 3; ++j) {
-            src[6 * k + j] = cp + j;
-            src[6 * k + 3 + j] = ct + j;
-        }
+        cols[k][0] = cp;
+        cols[k][1] = ct;
     }
     const int dk = m - 1;
     Vec3 pf;
@@ -1038,6 +1041,6 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
         tr.r[r] = t.depth_m - pc.z();
         S[r][r] = t.depth_var_m2 + w->prm.depth_var_floor_m2;
     }
-    add_pose_covariance(*w, m, src, hp, frame_rows, frame_nrows, S);
+    add_pose_covariance(*w, m, cols, hp, frame_rows, frame_nrows, S);
     return sfd_msckf_track_statistic(&tr, tr.R, gamma, dof);
 }
