@@ -303,7 +303,9 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
         if (!spd_solve3(H, g, &dp)) return false;
         if (!all_finite(dp.data(), 3)) return false;
         p += dp;
-        if (dp.norm() <= 1e-9 * (1.0 + p.norm())) break;
+        // Gauss-Newton converges about quadratically here (small pixel residuals): after a step
+        // of 1e-6 (relative) what is left is ~1e-9 or less, below any effect on the tests.
+        if (dp.norm() <= 1e-6 * (1.0 + p.norm())) break;
     }
     for (int k = 0; k < t.used; ++k) {
         const double z = (pose[k].R_WtoC * (p - pose[k].p_CinW)).z();
