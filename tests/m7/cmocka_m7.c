@@ -68,6 +68,15 @@ void _assert_int_equal(LargestIntegralType a, LargestIntegralType b, const char 
     }
 }
 
+void _assert_int_not_equal(LargestIntegralType a, LargestIntegralType b, const char *file,
+                           int line) {
+    if (a == b) {
+        printf("[  ERROR   ] --- %#llx == %#llx (%lld == %lld)\n", a, a, (long long)a,
+               (long long)b);
+        _fail(file, line);
+    }
+}
+
 void _assert_in_range(LargestIntegralType value, LargestIntegralType minimum,
                       LargestIntegralType maximum, const char *file, int line) {
     if (value < minimum || value > maximum) {

@@ -18,6 +18,7 @@ static void m7_assertions_pass(void **state) {
     assert_non_null(&x);
     assert_null(NULL);
     assert_int_equal(-1, -1);
+    assert_int_not_equal(-1, 1);
     assert_status(3, 3);
     assert_in_range(5, 0, 9);
     assert_string_equal("m7", "m7");

@@ -52,6 +52,9 @@ struct CMUnitTest {
 #define assert_int_equal(a, b)                                                            \
     _assert_int_equal(cast_to_largest_integral_type(a), cast_to_largest_integral_type(b), \
                       __FILE__, __LINE__)
+#define assert_int_not_equal(a, b)                                                            \
+    _assert_int_not_equal(cast_to_largest_integral_type(a), cast_to_largest_integral_type(b), \
+                          __FILE__, __LINE__)
 #define assert_in_range(value, minimum, maximum)                                                   \
     _assert_in_range(cast_to_largest_integral_type(value), cast_to_largest_integral_type(minimum), \
                      cast_to_largest_integral_type(maximum), __FILE__, __LINE__)
@@ -72,6 +75,8 @@ void print_error(const char *format, ...) __attribute__((format(printf, 1, 2)));
 
 void _assert_true(LargestIntegralType result, const char *expression, const char *file, int line);
 void _assert_int_equal(LargestIntegralType a, LargestIntegralType b, const char *file, int line);
+void _assert_int_not_equal(LargestIntegralType a, LargestIntegralType b, const char *file,
+                           int line);
 void _assert_in_range(LargestIntegralType value, LargestIntegralType minimum,
                       LargestIntegralType maximum, const char *file, int line);
 void _assert_string_equal(const char *a, const char *b, const char *file, int line);
