@@ -228,14 +228,6 @@ Eigen::Matrix<double, 2, 3, Eigen::RowMajor> proj_jacobian(const Vec3 &pc) {
     return J;
 }
 
-/// Triangulates a track over its clones (current estimates): from the depth prior's point when
-/// the track has one, else from the linear least-squares point of the rays
-/// (sum_k (I - b_k b_k^T)) p = sum_k (I - b_k b_k^T) c_k (refused when they are nearly parallel),
-/// then at most gauss_newton_iterations Gauss-Newton steps on the
-/// whitened reprojection errors plus the depth prior. False when the point is not finite or not
-/// within [min_depth_m, max_depth_m] in front of every clone.
-/// The depth prior is that of observation @p depth_k (the window's tracks: 0, the first; the
-/// detection test, sfd_window_test_track: the newest).
 /// x = H^-1 g for a symmetric positive definite 3x3 H by Cholesky (la::cholesky's pivot test,
 /// 1e-13 of the largest diagonal entry); false when H is not.
 bool spd_solve3(const Mat3 &H, const Vec3 &g, Vec3 *x) {
@@ -251,6 +243,14 @@ bool spd_solve3(const Mat3 &H, const Vec3 &g, Vec3 *x) {
     return true;
 }
 
+/// Triangulates a track over its clones (current estimates): from the depth prior's point when
+/// the track has one, else from the linear least-squares point of the rays
+/// (sum_k (I - b_k b_k^T)) p = sum_k (I - b_k b_k^T) c_k (refused when they are nearly parallel),
+/// then at most gauss_newton_iterations Gauss-Newton steps on the
+/// whitened reprojection errors plus the depth prior. False when the point is not finite or not
+/// within [min_depth_m, max_depth_m] in front of every clone.
+/// The depth prior is that of observation @p depth_k (the window's tracks: 0, the first; the
+/// detection test, sfd_window_test_track: the newest).
 bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPose *pose,
                  bool depth_row, int depth_k, Vec3 *p_out) {
     Vec3 p;
@@ -986,9 +986,10 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
     const int dk = m - 1;
     Vec3 pf;
     if (!triangulate(*w, t, pose, depth_row, dk, &pf)) return SFD_ERR_NUMERIC;
-    // Row i of the residual depends on frame blk[i]'s pose through the 6-vector hp[i] (dp,
-    // dtheta) and on the point through Hf. S = H_x P H_x^T + R is formed from the 6x6 blocks of P
-    // that each pair of frames touches (H_x is block sparse), in the scratch track's R.
+    // Row i of the residual depends on one frame's pose through the 6-vector hp[i] (dp, dtheta)
+    // and on the point through Hf. S = H_x P H_x^T + R is formed from the 6x6 blocks of P that
+    // each pair of frames touches (H_x is block sparse), in the scratch track's R; the track's
+    // Hx is not used (sfd_msckf_track_statistic reads rows, Hf and r).
     sfd_msckf_track_t &tr = w->scratch_track;
     const int rows = 2 * m + (depth_row ? 1 : 0);
     double hp[SFD_MSCKF_TRACK_ROWS][6];
@@ -996,10 +997,8 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
     int frame_nrows[SFD_MAX_WINDOW];
     double(*S)[SFD_MSCKF_TRACK_ROWS] = tr.R;
     tr.rows = rows;
-    tr.n = 1;
     tr.projected = 0;
     for (int i = 0; i < rows; ++i) {
-        tr.Hx[i][0] = 0.0;
         for (int j = 0; j < rows; ++j) S[i][j] = 0.0;
     }
     // Jacobians at the current estimates (a detection test over one window needs the right
