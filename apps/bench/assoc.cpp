@@ -27,6 +27,7 @@ namespace {
 sim_pair_t g_pair;
 sim_pair_t g_work;
 sfd_assoc_t g_assoc;
+sfd_assoc_work_t g_assoc_work;
 sfd_assoc_result_t g_res;
 
 struct Stats {
@@ -102,10 +103,11 @@ bool run_method(const Method &m, const sim_pair_t &pr, uint64_t seed, Stats *st)
         if (sfd_assoc_init(&g_assoc, &ap) != SFD_OK) return false;
         g_work.ekf = pr.ekf;  // the run updates the filter: start each from the same prior
         const double t0 = now_us();
-        const sfd_status_t s = sfd_assoc_select(&g_assoc, &g_work.ekf, &pr.cam, pr.prev_R_CtoW,
-                                                pr.prev_p_C, pr.m, pr.n, &g_res);
+        const sfd_status_t s = sfd_assoc_select(&g_assoc, &g_assoc_work, &g_work.ekf, &pr.cam,
+                                                pr.prev_R_CtoW, pr.prev_p_C, pr.m, pr.n, &g_res);
         const double t1 = now_us();
-        const sfd_status_t s2 = sfd_assoc_apply(&g_assoc, &g_work.ekf, &pr.cam, pr.m, pr.n, &g_res);
+        const sfd_status_t s2 =
+            sfd_assoc_apply(&g_assoc, &g_assoc_work, &g_work.ekf, &pr.cam, pr.m, pr.n, &g_res);
         const double t2 = now_us();
         if (s != SFD_OK || s2 != SFD_OK) return false;
         for (int i = 0; i < pr.n; ++i) {

@@ -137,7 +137,7 @@ int32_t score_all(sfd_assoc_t *a, Score score, const sfd_ekf_camera_t &cam, cons
     for (int32_t i = 0; i < n; ++i) {
         a->cur[i] = 0U;
         if (a->valid[i] == 0U || (only != nullptr && only[i] == 0U)) continue;
-        const double d = distance_px2(score, cam, model, m[i], a->work.ransac1.S_px2[i]);
+        const double d = distance_px2(score, cam, model, m[i], a->work->ransac1.S_px2[i]);
         const Gate g = gate_of(score, *a, sigma2);
         a->cur_stat[i] = static_cast<float>(std::fmin(d / g.unit_px2, 3.0e38));
         if (d <= g.thr_px2) {
@@ -210,6 +210,19 @@ constexpr std::size_t kMatchDoubles = 16;
 static_assert(offsetof(sfd_match_t, noise) == kMatchDoubles * sizeof(double),
               "sfd_match_t must start with exactly its 16 doubles");
 
+// Binds the caller's work space to the association for one call of sfd_assoc_select() or
+// sfd_assoc_apply() (sfd_assoc_t::work), and unbinds it on every return.
+class WorkBinding {
+  public:
+    WorkBinding(sfd_assoc_t &a, sfd_assoc_work_t *work) : a_(a) { a_.work = work; }
+    ~WorkBinding() { a_.work = nullptr; }
+    WorkBinding(const WorkBinding &) = delete;
+    WorkBinding &operator=(const WorkBinding &) = delete;
+
+  private:
+    sfd_assoc_t &a_;
+};
+
 bool same_prior(const sfd_assoc_t &a, const sfd_ekf_t &ekf) {
     return sfd_bits_equal(a.prior_p_m, ekf.p_IinW_m, 3) != 0 &&
            sfd_bits_equal(a.prior_q, ekf.q_ItoW, 4) != 0;
@@ -235,18 +248,21 @@ void write_verdicts(const sfd_assoc_t &a, sfd_assoc_result_t *out) {
 
 }  // namespace
 
-extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ekf,
-                                         const sfd_ekf_camera_t *cam, const double prev_R_CtoW[9],
-                                         const double prev_p_CinW_m[3], const sfd_match_t *matches,
-                                         int32_t n, sfd_assoc_result_t *out) {
-    if (assoc == nullptr || ekf == nullptr || cam == nullptr || prev_R_CtoW == nullptr ||
-        prev_p_CinW_m == nullptr || out == nullptr || (matches == nullptr && n > 0)) {
+extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, sfd_assoc_work_t *work,
+                                         const sfd_ekf_t *ekf, const sfd_ekf_camera_t *cam,
+                                         const double prev_R_CtoW[9], const double prev_p_CinW_m[3],
+                                         const sfd_match_t *matches, int32_t n,
+                                         sfd_assoc_result_t *out) {
+    if (assoc == nullptr || work == nullptr || ekf == nullptr || cam == nullptr ||
+        prev_R_CtoW == nullptr || prev_p_CinW_m == nullptr || out == nullptr ||
+        (matches == nullptr && n > 0)) {
         return SFD_ERR_INVAL;
     }
     if (n < 0 || n > SFD_MAX_FEATURES) return SFD_ERR_INVAL;
     if (assoc->initialized != 1 || ekf->initialized != 1) return SFD_ERR_STATE;
     if (!all_finite(prev_R_CtoW, 9) || !all_finite(prev_p_CinW_m, 3)) return SFD_ERR_INVAL;
     sfd_assoc_t &a = *assoc;
+    const WorkBinding bound(a, work);
     const sfd_assoc_params_t &prm = a.params;
     *out = sfd_assoc_result_t{};
     out->n = n;
@@ -290,21 +306,21 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
             Linearized lin;
             if (!lz.linearize(mt.obs, &lin)) continue;
             add_pixel_noise(&lin, sigma2, mt);  // S = sigma^2 C_curr + landmark spread
-            double *S = a.work.ransac1.S_px2[i];
+            double *S = a.work->ransac1.S_px2[i];
             S[0] = lin.R(0, 0);
             S[1] = 0.5 * (lin.R(0, 1) + lin.R(1, 0));
             S[2] = lin.R(1, 1);
         }
         a.valid[i] = 1U;
         if (pack_pixels) {  // the fundamental-matrix RANSAC's inputs
-            sfd_assoc_ransacf_work_t &w = a.work.ransacf;
+            sfd_assoc_ransacf_work_t &w = a.work->ransacf;
             w.x_prev[nv][0] = mt.prev_uv_px[0];
             w.x_prev[nv][1] = mt.prev_uv_px[1];
             w.x_curr[nv][0] = mt.obs.uv_px[0];
             w.x_curr[nv][1] = mt.obs.uv_px[1];
             w.noise[nv] = mt.noise;
         } else if (pack_oprf) {  // OPRF's scoring inputs
-            sfd_assoc_oprf_work_t &w = a.work.oprf;
+            sfd_assoc_oprf_work_t &w = a.work->oprf;
             w.nx_prev_u[nv] = static_cast<float>((mt.prev_uv_px[0] - cam->cx_px) * inv_fx);
             w.nx_prev_v[nv] = static_cast<float>((mt.prev_uv_px[1] - cam->cy_px) * inv_fy);
             w.nx_curr_u[nv] = static_cast<float>((mt.obs.uv_px[0] - cam->cx_px) * inv_fx);
@@ -322,7 +338,7 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
     for (int32_t k = nv; pack_oprf && k < SFD_ASSOC_PACKED_CAP && (k % SFD_ASSOC_SCORE_BLOCK) != 0;
          ++k) {
         const float nan = std::numeric_limits<float>::quiet_NaN();  // never an inlier
-        sfd_assoc_oprf_work_t &w = a.work.oprf;
+        sfd_assoc_oprf_work_t &w = a.work->oprf;
         w.nx_prev_u[k] = w.nx_prev_v[k] = w.nx_curr_u[k] = w.nx_curr_v[k] = nan;
         w.dc_prev_xx[k] = w.dc_prev_xy[k] = w.dc_prev_yy[k] = 0.0F;
         w.dc_curr_xx[k] = w.dc_curr_xy[k] = w.dc_curr_yy[k] = 0.0F;
@@ -362,14 +378,15 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ek
     return SFD_OK;
 }
 
-extern "C" sfd_status_t sfd_assoc_apply(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
+extern "C" sfd_status_t sfd_assoc_apply(sfd_assoc_t *assoc, sfd_assoc_work_t *work, sfd_ekf_t *ekf,
                                         const sfd_ekf_camera_t *cam, const sfd_match_t *matches,
                                         int32_t n, sfd_assoc_result_t *out) {
-    if (assoc == nullptr || ekf == nullptr || cam == nullptr || out == nullptr ||
+    if (assoc == nullptr || work == nullptr || ekf == nullptr || cam == nullptr || out == nullptr ||
         (matches == nullptr && n > 0)) {
         return SFD_ERR_INVAL;
     }
     sfd_assoc_t &a = *assoc;
+    const WorkBinding bound(a, work);
     if (a.initialized != 1 || a.selected != 1 || ekf->initialized != 1 || n != a.n || out->n != n ||
         !same_prior(a, *ekf)) {
         return SFD_ERR_STATE;
@@ -446,12 +463,12 @@ extern "C" sfd_status_t sfd_assoc_apply(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
     return SFD_OK;
 }
 
-extern "C" sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_ekf_t *ekf,
+extern "C" sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_assoc_work_t *work, sfd_ekf_t *ekf,
                                       const sfd_ekf_camera_t *cam, const double prev_R_CtoW[9],
                                       const double prev_p_CinW_m[3], const sfd_match_t *matches,
                                       int32_t n, sfd_assoc_result_t *out) {
     const sfd_status_t st =
-        sfd_assoc_select(assoc, ekf, cam, prev_R_CtoW, prev_p_CinW_m, matches, n, out);
+        sfd_assoc_select(assoc, work, ekf, cam, prev_R_CtoW, prev_p_CinW_m, matches, n, out);
     if (st != SFD_OK) return st;
-    return sfd_assoc_apply(assoc, ekf, cam, matches, n, out);
+    return sfd_assoc_apply(assoc, work, ekf, cam, matches, n, out);
 }

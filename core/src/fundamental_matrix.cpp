@@ -367,7 +367,7 @@ sfd_status_t ransacf_select(sfd_assoc_t *a, const SelectInputs &in, sfd_assoc_re
     a->stage = SFD_STAGE_RANSAC_F;
     sfd_ransacf_result_t rf;
     // cur[] holds the compacted inlier flags of the nv valid matches.
-    sfd_assoc_ransacf_work_t &w = a->work.ransacf;
+    sfd_assoc_ransacf_work_t &w = a->work->ransacf;
     const sfd_status_t st = sfd_ransacf(w.x_prev, w.x_curr, w.noise, nv, a->chi2_1 * in.sigma2,
                                         prm.confidence, prm.max_hypotheses, &a->rng, a->cur, &rf);
     if (st == SFD_ERR_RANGE || st == SFD_ERR_NUMERIC) {

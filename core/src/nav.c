@@ -354,7 +354,7 @@ static void window_frame(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t 
     int32_t n = 0;
     for (int32_t i = 0; i < frame->num_features && n < SFD_MAX_FEATURES; ++i) {
         if (!nav->ok[i]) continue;
-        sfd_window_obs_t *o = &nav->win_obs[n++];
+        sfd_window_obs_t *o = &nav->work.window.obs[n++];
         o->track_id = frame->features[i].track_id;
         o->xn[0] = nav->xn[i][0];
         o->xn[1] = nav->xn[i][1];
@@ -368,8 +368,8 @@ static void window_frame(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t 
         o->drop = status[i] == SFD_VERDICT_SPURIOUS;
     }
     sfd_window_result_t *r = &nav->win_result;
-    if (sfd_window_frame(&nav->win, frame->utime, nav->win_obs, n, &nav->ekf_cam.ext, r) !=
-            SFD_OK ||
+    if (sfd_window_frame(&nav->win, frame->utime, nav->work.window.obs, n, &nav->ekf_cam.ext,
+                         &nav->work.window.scratch, r) != SFD_OK ||
         r->update_status != SFD_OK || sfd_window_to_ekf(&nav->win, &nav->ekf) != SFD_OK) {
         nav->ready = 0; /* restart at rest later */
         return;
@@ -404,7 +404,7 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
         if (p < 0) continue;
         const int32_t li = sfd_landmark_find(&nav->map, id);
         if (li < 0) continue;
-        sfd_match_t *m = &nav->matches[nav->num_matches];
+        sfd_match_t *m = &nav->work.assoc.matches[nav->num_matches];
         m->prev_uv_px[0] = nav->prev_uv[p][0];
         m->prev_uv_px[1] = nav->prev_uv[p][1];
         if (sfd_landmark_to_obs(&nav->map, li, nav->uv[i], &m->obs) != SFD_OK) continue;

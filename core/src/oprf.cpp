@@ -69,7 +69,7 @@ int32_t sampson_count_packed(const sfd_assoc_t *a, const float E[9], const AxisW
         for (int32_t j = k0; j < k0 + kBlock; ++j) {
             float e = 0.0F;
             float rhs = 0.0F;
-            sampson_terms_f(Ek, a->work.oprf, j, thr, &e, &rhs);
+            sampson_terms_f(Ek, a->work->oprf, j, thr, &e, &rhs);
             const int32_t in =
                 static_cast<int32_t>(e * e <= rhs) & static_cast<int32_t>(rhs > 0.0F);
             block_count += in;
@@ -88,11 +88,11 @@ void sampson_stat_packed(sfd_assoc_t *a, const float E[9], const AxisWeights &in
     float Ek[9];
     for (int k = 0; k < 9; ++k) Ek[k] = E[k];
     for (int32_t k0 = 0; k0 < nv; k0 += kBlock) {
-        float *stat = a->work.oprf.packed_stat;
+        float *stat = a->work->oprf.packed_stat;
         for (int32_t j = k0; j < k0 + kBlock; ++j) {
             float e = 0.0F;
             float den = 0.0F;
-            sampson_terms_f(Ek, a->work.oprf, j, inv_f2, &e, &den);
+            sampson_terms_f(Ek, a->work->oprf, j, inv_f2, &e, &den);
             const float d = (e * e * inv_sigma2) / den;
             stat[j] = (d <= 3.0e38F) ? d : 3.0e38F;  // den = 0 gives Inf or NaN: 3e38
         }
@@ -239,7 +239,7 @@ void oprf_select(sfd_assoc_t *a, const SelectInputs &in, sfd_assoc_result_t *out
         // matches, over the chi2(1) median 0.4549, measures it (robust while at most half
         // are spurious); kept within [1/25, 25], 1 below 16 matches.
         if (nv >= kScaleMinMatches) {
-            for (int32_t k = 0; k < nv; ++k) a->cur_stat[k] = a->work.oprf.packed_stat[k];
+            for (int32_t k = 0; k < nv; ++k) a->cur_stat[k] = a->work->oprf.packed_stat[k];
             const double s = median_in_place(a->cur_stat, nv) / kChi2Dof1Median;
             a->sampson_scale = (s < 0.04) ? 0.04 : ((s > 25.0) ? 25.0 : s);
         }
@@ -248,7 +248,7 @@ void oprf_select(sfd_assoc_t *a, const SelectInputs &in, sfd_assoc_result_t *out
         best_count = 0;
         for (int32_t k = 0; k < nv; ++k) {
             const int32_t i = a->valid_idx[k];
-            const float d = a->work.oprf.packed_stat[k] * inv_scale;
+            const float d = a->work->oprf.packed_stat[k] * inv_scale;
             a->best[i] = (d <= chi2_1) ? 1U : 0U;
             best_count += a->best[i];
             a->best_stat[i] = d;

@@ -484,6 +484,7 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // False when the filter does not hold the window's frames (nothing written: the caller falls
 // back to the group test).
 __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t *filter,
+                                                sfd_window_scratch_t *scratch,
                                                 const sfd_extrinsics_t &ext, sfd_verdict_t *out) {
     const int L = det.params.window_frames;
     // The filter must hold the window: its newest L - 1 clones at the window's older frames and
@@ -520,7 +521,7 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         double gamma = 0.0;
         int32_t dof = 0;
         sfd_feature_result_t *v = &out->features[i];
-        sfd_status_t st = sfd_window_test_track(filter, &ext, &obs, &gamma, &dof);
+        sfd_status_t st = sfd_window_test_track(filter, &ext, &obs, scratch, &gamma, &dof);
         if (st != SFD_OK || dof < 1 || dof > SFD_PARITY_MAX_RESIDUAL) {
             v->reason = (st == SFD_ERR_NUMERIC) ? SFD_REASON_RANK : SFD_REASON_NUMERIC;
             continue;
@@ -538,7 +539,7 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         const int m = newest.segment < m_max ? newest.segment : m_max;
         if (!evidence || m <= L) continue;
         load_track(det, i, m, scale, &obs);
-        st = sfd_window_test_track(filter, &ext, &obs, &gamma, &dof);
+        st = sfd_window_test_track(filter, &ext, &obs, scratch, &gamma, &dof);
         if (st != SFD_OK || dof < 1 || dof > SFD_PARITY_MAX_RESIDUAL) continue;
         thr = tab.threshold[dof];
         if (gamma > thr) {
@@ -616,16 +617,17 @@ extern "C" sfd_status_t sfd_parity_newest_xn(const sfd_parity_t *det, int64_t ut
 extern "C" sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
                                               const sfd_frame_motion_t *motion,
                                               sfd_verdict_t *out) {
-    return sfd_parity_push_frame_filter(det, frame, motion, nullptr, nullptr, out);
+    return sfd_parity_push_frame_filter(det, frame, motion, nullptr, nullptr, nullptr, out);
 }
 
 extern "C" sfd_status_t sfd_parity_push_frame_filter(sfd_parity_t *det, const sfd_frame_t *frame,
                                                      const sfd_frame_motion_t *motion,
                                                      sfd_window_t *filter,
+                                                     sfd_window_scratch_t *scratch,
                                                      const sfd_extrinsics_t *ext,
                                                      sfd_verdict_t *out) {
     if (det == nullptr || frame == nullptr || out == nullptr) return SFD_ERR_INVAL;
-    if (filter != nullptr && ext == nullptr) return SFD_ERR_INVAL;
+    if (filter != nullptr && (ext == nullptr || scratch == nullptr)) return SFD_ERR_INVAL;
     if (det->magic_ != kMagic) return SFD_ERR_STATE;
     if (frame->num_features < 0 || frame->num_features > SFD_MAX_FEATURES) {
         return SFD_ERR_CAPACITY;
@@ -656,7 +658,7 @@ extern "C" sfd_status_t sfd_parity_push_frame_filter(sfd_parity_t *det, const sf
     const bool want_filter = det->params.translation_known != 0 && filter != nullptr;
     if (det->count < L) {
         out->flags |= SFD_FLAG_WINDOW_FILLING;
-    } else if (want_filter && test_with_filter(*det, filter, *ext, out)) {
+    } else if (want_filter && test_with_filter(*det, filter, scratch, *ext, out)) {
         // every feature of the window tested alone (known translation from the filter)
     } else {
         if (want_filter) out->flags |= SFD_FLAG_TRANSLATION_UNKNOWN;

@@ -423,8 +423,8 @@ static void run_parity(sfd_pipeline_t *p, const sfd_frame_t *frame, int imu_reas
     }
     /* Known translation from the window filter once it runs and was advanced to this frame. */
     sfd_window_t *win = (p->cfg.nav.window_filter && p->nav_ok) ? &p->nav.win : NULL;
-    if (sfd_parity_push_frame_filter(&p->parity, frame, mp, win, &p->ext, &p->out.verdict) !=
-        SFD_OK) {
+    if (sfd_parity_push_frame_filter(&p->parity, frame, mp, win, &p->nav.work.window.scratch,
+                                     &p->ext, &p->out.verdict) != SFD_OK) {
         sfd_pipeline_count_reject(p, SFD_REJECT_CORE);
         sfd_parity_reset(&p->parity);
         untested_verdict(&p->out.verdict, frame);
@@ -503,9 +503,9 @@ sfd_status_t sfd_pipeline_associate(sfd_pipeline_t *p) {
         sfd_nav_t *nv = &p->nav;
         p->num_matches =
             sfd_nav_build(nv, &p->camera, frame, p->skip, parity_ran ? &p->parity : NULL);
-        p->select_status =
-            sfd_assoc_select(&nv->assoc, &nv->ekf, &nv->ekf_cam, nv->prev_R_CtoW, nv->prev_p_CinW_m,
-                             nv->matches, p->num_matches, &nv->result);
+        p->select_status = sfd_assoc_select(&nv->assoc, &nv->work.assoc.scratch, &nv->ekf,
+                                            &nv->ekf_cam, nv->prev_R_CtoW, nv->prev_p_CinW_m,
+                                            nv->work.assoc.matches, p->num_matches, &nv->result);
     }
     p->stage = 2;
     return SFD_OK;
@@ -519,14 +519,15 @@ static void apply_association(sfd_pipeline_t *p, const sfd_frame_t *frame) {
      * runs on a copy, for its verdicts only. */
     sfd_ekf_t *assoc_ekf = &nv->ekf;
     if (p->cfg.nav.window_filter) {
-        nv->ekf_scratch = nv->ekf;
-        assoc_ekf = &nv->ekf_scratch;
+        nv->work.assoc.ekf = nv->ekf;
+        assoc_ekf = &nv->work.assoc.ekf;
     }
     const sfd_status_t s1 = p->select_status;
-    const sfd_status_t s2 = (s1 == SFD_OK)
-                                ? sfd_assoc_apply(&nv->assoc, assoc_ekf, &nv->ekf_cam, nv->matches,
-                                                  p->num_matches, &nv->result)
-                                : s1;
+    const sfd_status_t s2 =
+        (s1 == SFD_OK)
+            ? sfd_assoc_apply(&nv->assoc, &nv->work.assoc.scratch, assoc_ekf, &nv->ekf_cam,
+                              nv->work.assoc.matches, p->num_matches, &nv->result)
+            : s1;
     if (s1 != SFD_OK || s2 != SFD_OK || nv->result.update_status != SFD_OK) {
         sfd_pipeline_count_reject(p, SFD_REJECT_CORE);
     }

@@ -361,8 +361,9 @@ enum class TrackOutcome { kNoGeometry, kGated, kUsed, kNumeric };
 /// The track's residual (1) at the current clones, its Jacobians (at the current clones,
 /// observability-constrained, or at the first estimates), the projection (2), the gate (3) and,
 /// when it passes, the fold into the stack.
-TrackOutcome process_track(sfd_window_t *w, const sfd_window_track_t &t,
-                           const sfd_extrinsics_t &ext, double *gamma_out, int32_t *dof_out) {
+TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
+                           const sfd_window_track_t &t, const sfd_extrinsics_t &ext,
+                           double *gamma_out, int32_t *dof_out) {
     const uint32_t oldest = w->clones[0].seq;
     const int32_t c0 = static_cast<int32_t>(t.first_clone - oldest);
     if (c0 < 0 || c0 + t.used > w->num_clones) return TrackOutcome::kNoGeometry;
@@ -387,7 +388,7 @@ TrackOutcome process_track(sfd_window_t *w, const sfd_window_track_t &t,
     Vec3 pf;
     if (!triangulate(*w, t, cur, depth_row, 0, &pf)) return TrackOutcome::kNoGeometry;
 
-    sfd_msckf_track_t &tr = w->scratch_track;
+    sfd_msckf_track_t &tr = scratch->track;
     const int n = dim(*w);
     const int rows = 2 * t.used + (depth_row ? 1 : 0);
     tr.rows = rows;
@@ -493,7 +494,7 @@ TrackOutcome process_track(sfd_window_t *w, const sfd_window_track_t &t,
     *gamma_out = gamma;
     *dof_out = dof;
     if (dof < 1 || dof >= SFD_MSCKF_TRACK_ROWS || gamma > w->gate[dof]) return TrackOutcome::kGated;
-    if (sfd_msckf_stack_fold(&w->scratch_stack, &tr) != SFD_OK) return TrackOutcome::kNumeric;
+    if (sfd_msckf_stack_fold(&scratch->stack, &tr) != SFD_OK) return TrackOutcome::kNumeric;
     return TrackOutcome::kUsed;
 }
 
@@ -765,14 +766,15 @@ extern "C" sfd_status_t sfd_window_propagate(sfd_window_t *w, const double gyro_
 
 extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
                                          const sfd_window_obs_t *obs, int32_t n,
-                                         const sfd_extrinsics_t *ext, sfd_window_result_t *result) {
-    if (w == nullptr || result == nullptr || ext == nullptr || n < 0 || n > SFD_WINDOW_MAX_TRACKS ||
-        (n > 0 && obs == nullptr)) {
+                                         const sfd_extrinsics_t *ext, sfd_window_scratch_t *scratch,
+                                         sfd_window_result_t *result) {
+    if (w == nullptr || result == nullptr || ext == nullptr || scratch == nullptr || n < 0 ||
+        n > SFD_WINDOW_MAX_TRACKS || (n > 0 && obs == nullptr)) {
         return SFD_ERR_INVAL;
     }
     if (!w->started) return SFD_ERR_STATE;
     std::memset(result, 0, offsetof(sfd_window_result_t, gated_ids));
-    w->scratch_track.projected = 0;  // set again by a track of this frame that reaches projection
+    scratch->track.projected = 0;  // set again by a track of this frame that reaches projection
     flush(w);
     if (w->num_clones >= w->prm.window) marginalize_oldest(w);  // defensive: invariant
     augment(w, utime);
@@ -830,7 +832,7 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
     // Tracks due: ended (not seen now), or reaching the oldest clone of a full window.
     const bool full = w->num_clones >= w->prm.window;
     const uint32_t oldest = w->clones[0].seq;
-    sfd_msckf_stack_reset(&w->scratch_stack, dim(*w));
+    sfd_msckf_stack_reset(&scratch->stack, dim(*w));
     for (int32_t k = 0; k < w->num_tracks; ++k) {
         sfd_window_track_t &t = w->tracks[k];
         if (t.used <= 0) continue;
@@ -844,7 +846,7 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
         }
         double gamma = 0.0;
         int32_t dof = 0;
-        const TrackOutcome out = process_track(w, t, *ext, &gamma, &dof);
+        const TrackOutcome out = process_track(w, scratch, t, *ext, &gamma, &dof);
         switch (out) {
             case TrackOutcome::kUsed:
                 result->used++;
@@ -868,10 +870,10 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
         t.used = 0;  // each observation informs the filter once; a gated one never
     }
     result->update_status = SFD_OK;
-    if (w->scratch_stack.folded > 0) {
+    if (scratch->stack.folded > 0) {
         const sfd_status_t st =
-            sfd_msckf_update(&w->scratch_stack, &w->P[0][0], w->scratch_dx, &w->scratch_work);
-        if (st != SFD_OK || !inject(w, w->scratch_dx)) {
+            sfd_msckf_update(&scratch->stack, &w->P[0][0], scratch->dx, &scratch->work);
+        if (st != SFD_OK || !inject(w, scratch->dx)) {
             w->numeric_faults++;
             result->update_status = (st != SFD_OK) ? st : SFD_ERR_NUMERIC;
         }
@@ -936,9 +938,11 @@ extern "C" sfd_status_t sfd_window_position_var(sfd_window_t *w, double var_m2[3
 }
 
 extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
-                                              const sfd_window_test_obs_t *obs, double *gamma,
+                                              const sfd_window_test_obs_t *obs,
+                                              sfd_window_scratch_t *scratch, double *gamma,
                                               int32_t *dof) {
-    if (w == nullptr || ext == nullptr || obs == nullptr || gamma == nullptr || dof == nullptr) {
+    if (w == nullptr || ext == nullptr || obs == nullptr || scratch == nullptr ||
+        gamma == nullptr || dof == nullptr) {
         return SFD_ERR_INVAL;
     }
     const int m = obs->frames;
@@ -990,7 +994,7 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
     // and on the point through Hf. S = H_x P H_x^T + R is formed from the 6x6 blocks of P that
     // each pair of frames touches (H_x is block sparse), in the scratch track's R; the track's
     // Hx is not used (sfd_msckf_track_statistic reads rows, Hf and r).
-    sfd_msckf_track_t &tr = w->scratch_track;
+    sfd_msckf_track_t &tr = scratch->track;
     const int rows = 2 * m + (depth_row ? 1 : 0);
     double hp[SFD_MSCKF_TRACK_ROWS][6];
     int frame_rows[SFD_MAX_WINDOW][3];  // the rows of frame k: 2k, 2k + 1 (and the depth row)

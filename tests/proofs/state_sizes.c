@@ -14,11 +14,12 @@
 #endif
 
 /* One detector's worth of state: everything a caller instantiates per camera to run the
- * combined pipeline (parity window, EKF, association workspace and result, landmark map). */
+ * combined pipeline (parity window, EKF, association object, its work space and result,
+ * landmark map). */
 #define SFD_STATE_TOTAL                                                     \
     (sizeof(sfd_parity_t) + sizeof(sfd_extrinsics_t) + sizeof(sfd_prng_t) + \
      sizeof(sfd_landmark_map_t) + sizeof(sfd_ekf_t) + sizeof(sfd_assoc_t) + \
-     sizeof(sfd_assoc_result_t))
+     sizeof(sfd_assoc_work_t) + sizeof(sfd_assoc_result_t))
 
 _Static_assert(SFD_MAX_FEATURES != 256 || SFD_MAX_WINDOW != 5 ||
                    SFD_STATE_TOTAL <= SFD_STATE_BUDGET_BYTES,
@@ -42,13 +43,17 @@ int main(void) {
     printf("%-22s %8zu B (%d landmarks)\n", "sfd_landmark_map_t", sizeof(sfd_landmark_map_t),
            SFD_MAX_LANDMARKS);
     printf("%-22s %8zu B (15-state error-state EKF)\n", "sfd_ekf_t", sizeof(sfd_ekf_t));
-    printf("%-22s %8zu B (association workspace)\n", "sfd_assoc_t", sizeof(sfd_assoc_t));
+    printf("%-22s %8zu B (association object)\n", "sfd_assoc_t", sizeof(sfd_assoc_t));
+    printf("%-22s %8zu B (association work space, caller-owned)\n", "sfd_assoc_work_t",
+           sizeof(sfd_assoc_work_t));
     printf("%-22s %8zu B (association verdicts)\n", "sfd_assoc_result_t",
            sizeof(sfd_assoc_result_t));
     printf("%-22s %8zu B (caller's input frame)\n", "sfd_frame_t", sizeof(sfd_frame_t));
     printf("%-22s %8zu B (caller's output)\n", "sfd_verdict_t", sizeof(sfd_verdict_t));
     printf("%-22s %8zu B (sliding-window filter, %d tracks)\n", "sfd_window_t",
            sizeof(sfd_window_t), SFD_WINDOW_MAX_TRACKS);
+    printf("%-22s %8zu B (its work space, caller-owned)\n", "sfd_window_scratch_t",
+           sizeof(sfd_window_scratch_t));
     printf("%-22s %8zu B (%d samples)\n", "sfd_imu_ring_t", sizeof(sfd_imu_ring_t),
            SFD_IMU_RING_CAPACITY);
     printf("%-22s %8zu B (filter, landmarks, association, matches)\n", "sfd_nav_t",

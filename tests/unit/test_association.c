@@ -18,6 +18,9 @@ typedef struct {
     long tp, fp, tn, fn, untested;
 } counts_t;
 
+/* the association's work space, shared by every association of this file (one call at a time) */
+static sfd_assoc_work_t g_aw;
+
 static void tally(const sim_pair_t *pr, const sfd_assoc_result_t *r, counts_t *c) {
     for (int i = 0; i < pr->n; ++i) {
         if (r->status[i] == SFD_VERDICT_UNTESTED) {
@@ -55,8 +58,8 @@ static counts_t run_trials(int method, const sim_pair_opts_t *o, int trials, dou
             const double d = pair.ekf.p_IinW_m[k] - pair.true_p_I[k];
             e0 += d * d;
         }
-        assert_status(sfd_assoc_run(&assoc, &pair.ekf, &pair.cam, pair.prev_R_CtoW, pair.prev_p_C,
-                                    pair.m, pair.n, &res),
+        assert_status(sfd_assoc_run(&assoc, &g_aw, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
+                                    pair.prev_p_C, pair.m, pair.n, &res),
                       SFD_OK);
         assert_status(res.update_status, SFD_OK);
         for (int k = 0; k < 3; ++k) {
@@ -170,7 +173,7 @@ static void hypotheses_never_exceed_the_budget(void **state) {
         o.outlier_ratio = 1.0;
         for (int t = 0; t < 5; ++t) {
             sim_pair_make(&pair, &o, 50U + (uint64_t)t);
-            assert_status(sfd_assoc_run(&assoc, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
+            assert_status(sfd_assoc_run(&assoc, &g_aw, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
                                         pair.prev_p_C, pair.m, pair.n, &res),
                           SFD_OK);
             assert_true(res.hypotheses_used <= 37);
@@ -196,9 +199,11 @@ static void same_seed_gives_identical_verdicts(void **state) {
     assert_status(sfd_assoc_init(&a1, &ap), SFD_OK);
     assert_status(sfd_assoc_init(&a2, &ap), SFD_OK);
     assert_status(
-        sfd_assoc_run(&a1, &p1.ekf, &p1.cam, p1.prev_R_CtoW, p1.prev_p_C, p1.m, p1.n, &r1), SFD_OK);
+        sfd_assoc_run(&a1, &g_aw, &p1.ekf, &p1.cam, p1.prev_R_CtoW, p1.prev_p_C, p1.m, p1.n, &r1),
+        SFD_OK);
     assert_status(
-        sfd_assoc_run(&a2, &p2.ekf, &p2.cam, p2.prev_R_CtoW, p2.prev_p_C, p2.m, p2.n, &r2), SFD_OK);
+        sfd_assoc_run(&a2, &g_aw, &p2.ekf, &p2.cam, p2.prev_R_CtoW, p2.prev_p_C, p2.m, p2.n, &r2),
+        SFD_OK);
     assert_memory_equal(&r1, &r2, sizeof r1);
     assert_memory_equal(&p1.ekf, &p2.ekf, sizeof p1.ekf);
 }
@@ -258,7 +263,7 @@ static long edge_false_alarms(int method, int jacobian, int trials, long *n_edge
     for (int t = 0; t < trials; ++t) {
         assert_int_equal(sim_pair_make(&pair, &o, 5000U + (uint64_t)t), 0);
         distort_pair(&pair, 1.0, 9000U + (uint64_t)t, jacobian, edge);
-        assert_status(sfd_assoc_select(&assoc, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
+        assert_status(sfd_assoc_select(&assoc, &g_aw, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
                                        pair.prev_p_C, pair.m, pair.n, &res),
                       SFD_OK);
         for (int i = 0; i < pair.n; ++i) {
@@ -322,8 +327,8 @@ static void oprf_falls_back_to_rotation_only_without_translation(void **state) {
     counts_t c = {0, 0, 0, 0, 0};
     for (int t = 0; t < 5; ++t) {
         sim_pair_make(&pair, &o, 300U + (uint64_t)t);
-        assert_status(sfd_assoc_run(&assoc, &pair.ekf, &pair.cam, pair.prev_R_CtoW, pair.prev_p_C,
-                                    pair.m, pair.n, &res),
+        assert_status(sfd_assoc_run(&assoc, &g_aw, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
+                                    pair.prev_p_C, pair.m, pair.n, &res),
                       SFD_OK);
         assert_int_equal(res.degenerate_motion, 1);
         tally(&pair, &res, &c);
@@ -348,18 +353,22 @@ static void invalid_matches_are_untested_and_bad_arguments_rejected(void **state
         pair.m[0].obs.landmark_W_m[k] = 2.0 * pair.prev_p_C[k] - pair.m[0].obs.landmark_W_m[k];
     }
     pair.m[1].obs.uv_px[0] = NAN;
-    assert_status(sfd_assoc_run(&assoc, &pair.ekf, &pair.cam, pair.prev_R_CtoW, pair.prev_p_C,
-                                pair.m, pair.n, &res),
+    assert_status(sfd_assoc_run(&assoc, &g_aw, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
+                                pair.prev_p_C, pair.m, pair.n, &res),
                   SFD_OK);
     assert_int_equal(res.status[0], SFD_VERDICT_UNTESTED);
     assert_int_equal(res.status[1], SFD_VERDICT_UNTESTED);
     assert_int_equal(res.num_untested, 2);
     assert_int_equal(res.num_consistent + res.num_spurious, pair.n - 2);
-    assert_status(sfd_assoc_run(&assoc, &pair.ekf, &pair.cam, pair.prev_R_CtoW, pair.prev_p_C,
-                                pair.m, SFD_MAX_FEATURES + 1, &res),
+    assert_status(sfd_assoc_run(&assoc, &g_aw, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
+                                pair.prev_p_C, pair.m, SFD_MAX_FEATURES + 1, &res),
                   SFD_ERR_INVAL);
-    assert_status(sfd_assoc_run(&assoc, &pair.ekf, &pair.cam, NULL, pair.prev_p_C, pair.m, 3, &res),
-                  SFD_ERR_INVAL);
+    assert_status(
+        sfd_assoc_run(&assoc, &g_aw, &pair.ekf, &pair.cam, NULL, pair.prev_p_C, pair.m, 3, &res),
+        SFD_ERR_INVAL);
+    assert_status(sfd_assoc_run(&assoc, NULL, &pair.ekf, &pair.cam, pair.prev_R_CtoW, pair.prev_p_C,
+                                pair.m, 3, &res),
+                  SFD_ERR_INVAL); /* no work space */
     ap.method = SFD_METHOD_PARITY;
     assert_status(sfd_assoc_init(&assoc, &ap), SFD_ERR_INVAL);
     ap.method = SFD_METHOD_OPRF;
@@ -367,8 +376,8 @@ static void invalid_matches_are_untested_and_bad_arguments_rejected(void **state
     assert_status(sfd_assoc_init(&assoc, &ap), SFD_ERR_CAPACITY);
     static sfd_assoc_t fresh;
     memset(&fresh, 0, sizeof fresh);
-    assert_status(sfd_assoc_run(&fresh, &pair.ekf, &pair.cam, pair.prev_R_CtoW, pair.prev_p_C,
-                                pair.m, 3, &res),
+    assert_status(sfd_assoc_run(&fresh, &g_aw, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
+                                pair.prev_p_C, pair.m, 3, &res),
                   SFD_ERR_STATE);
 }
 
@@ -389,22 +398,24 @@ static void select_then_apply_equals_run_and_checks_its_sequence(void **state) {
     assert_status(sfd_assoc_init(&a1, &ap), SFD_OK);
     assert_status(sfd_assoc_init(&a2, &ap), SFD_OK);
     assert_status(
-        sfd_assoc_run(&a1, &p1.ekf, &p1.cam, p1.prev_R_CtoW, p1.prev_p_C, p1.m, p1.n, &r1), SFD_OK);
-    assert_status(sfd_assoc_apply(&a2, &p2.ekf, &p2.cam, p2.m, p2.n, &r2), SFD_ERR_STATE);
-    assert_status(
-        sfd_assoc_select(&a2, &p2.ekf, &p2.cam, p2.prev_R_CtoW, p2.prev_p_C, p2.m, p2.n, &r2),
+        sfd_assoc_run(&a1, &g_aw, &p1.ekf, &p1.cam, p1.prev_R_CtoW, p1.prev_p_C, p1.m, p1.n, &r1),
         SFD_OK);
+    assert_status(sfd_assoc_apply(&a2, &g_aw, &p2.ekf, &p2.cam, p2.m, p2.n, &r2), SFD_ERR_STATE);
+    assert_status(sfd_assoc_select(&a2, &g_aw, &p2.ekf, &p2.cam, p2.prev_R_CtoW, p2.prev_p_C, p2.m,
+                                   p2.n, &r2),
+                  SFD_OK);
     /* the provisional verdicts are set 1: every match judged, none untested */
     assert_int_equal(r2.num_consistent + r2.num_spurious, p2.n);
-    assert_status(sfd_assoc_apply(&a2, &p2.ekf, &p2.cam, p2.m, p2.n - 1, &r2), SFD_ERR_STATE);
+    assert_status(sfd_assoc_apply(&a2, &g_aw, &p2.ekf, &p2.cam, p2.m, p2.n - 1, &r2),
+                  SFD_ERR_STATE);
     sfd_ekf_t moved = p2.ekf;
     moved.p_IinW_m[0] += 1e-9;
-    assert_status(sfd_assoc_apply(&a2, &moved, &p2.cam, p2.m, p2.n, &r2), SFD_ERR_STATE);
-    assert_status(sfd_assoc_apply(&a2, &p2.ekf, &p2.cam, p2.m, p2.n, &r2), SFD_OK);
+    assert_status(sfd_assoc_apply(&a2, &g_aw, &moved, &p2.cam, p2.m, p2.n, &r2), SFD_ERR_STATE);
+    assert_status(sfd_assoc_apply(&a2, &g_aw, &p2.ekf, &p2.cam, p2.m, p2.n, &r2), SFD_OK);
     assert_memory_equal(&r1, &r2, sizeof r1);
     assert_memory_equal(&p1.ekf, &p2.ekf, sizeof p1.ekf);
     /* a second apply needs a new selection */
-    assert_status(sfd_assoc_apply(&a2, &p2.ekf, &p2.cam, p2.m, p2.n, &r2), SFD_ERR_STATE);
+    assert_status(sfd_assoc_apply(&a2, &g_aw, &p2.ekf, &p2.cam, p2.m, p2.n, &r2), SFD_ERR_STATE);
 }
 
 int main(void) {

@@ -110,8 +110,8 @@ static void nav_build_matches_first_occurrence_of_previous_tracks(void **state) 
     const int32_t nm = sfd_nav_build(&g_nav, &cam, &b, NULL, NULL);
     assert_int_equal(nm, 2);
     assert_int_equal(g_nav.feature_match[1], -1);
-    const sfd_match_t *m9 = &g_nav.matches[g_nav.feature_match[0]];
-    const sfd_match_t *m5 = &g_nav.matches[g_nav.feature_match[2]];
+    const sfd_match_t *m9 = &g_nav.work.assoc.matches[g_nav.feature_match[0]];
+    const sfd_match_t *m5 = &g_nav.work.assoc.matches[g_nav.feature_match[2]];
     assert_near(m9->prev_uv_px[0], a.features[199].u_px, 1e-9);
     assert_near(m9->prev_uv_px[1], a.features[199].v_px, 1e-9);
     assert_near(m5->prev_uv_px[0], a.features[3].u_px, 1e-9);

@@ -24,6 +24,7 @@
 #include <sfd/sfd_window.h>
 
 static sfd_window_t g_w;
+static sfd_window_scratch_t g_ws; /* the filter's work space for every call */
 
 enum { NPTS = 400, IMU_PER_FRAME = 10 };
 static const double kDt = 0.005;       /* IMU period (s) */
@@ -202,12 +203,12 @@ static double phi_null_violation(const sfd_window_t *w, const double fe_p0[3],
     return worst;
 }
 
-/* H N for the last projected track of a frame (scratch_track: its rows are N_f^T H_x, the point
+/* H N for the last projected track of a frame (g_ws.track: its rows are N_f^T H_x, the point
  * projected out), with N at the clones' first-estimate positions: clones[] as they were before
  * the frame's marginalization. Relative to |H row| |N column|. */
 static double h_null_violation(const sfd_window_t *w, const sfd_window_clone_t *clones,
                                int num_clones) {
-    const sfd_msckf_track_t *tr = &w->scratch_track;
+    const sfd_msckf_track_t *tr = &g_ws.track;
     const double g = w->prm.noise.gravity_m_s2;
     double worst = 0.0;
     for (int c = 0; c < 4; ++c) {
@@ -272,7 +273,7 @@ static void track_tests(const sfd_extrinsics_t *ext, int f, int64_t t0_us, int j
         }
         double gamma = 0.0;
         int32_t dof = 0;
-        const sfd_status_t st = sfd_window_test_track(&g_w, ext, &o, &gamma, &dof);
+        const sfd_status_t st = sfd_window_test_track(&g_w, ext, &o, &g_ws, &gamma, &dof);
         if (st == SFD_ERR_STATE || st == SFD_ERR_NUMERIC) continue; /* too few clones; geometry */
         assert_status(st, SFD_OK);
         assert_int_equal(dof, 3); /* 2 L - 3, no depth prior */
@@ -414,9 +415,9 @@ static void run_flight_from(uint64_t seed, double seconds, int jac, int jump_tra
             ++num_clones;
         }
         assert_status(sfd_window_frame(&g_w, (int64_t)rest_samples * 5000 + (int64_t)f * 50000, obs,
-                                       n, &ext, &res),
+                                       n, &ext, &g_ws, &res),
                       SFD_OK);
-        if (g_null_check && g_w.scratch_track.projected) {
+        if (g_null_check && g_ws.track.projected) {
             const double vh = h_null_violation(&g_w, clones, num_clones);
             if (vh > g_h_violation) g_h_violation = vh;
             ++g_h_checked;
@@ -684,11 +685,12 @@ static void flagged_tracks_are_dropped_and_capacities_hold(void **state) {
     sfd_window_obs_t obs[SFD_WINDOW_MAX_TRACKS];
     memset(obs, 0, sizeof obs);
     /* not started */
-    assert_status(sfd_window_frame(&g_w, 1, obs, 0, &ext, &res), SFD_ERR_STATE);
+    assert_status(sfd_window_frame(&g_w, 1, obs, 0, &ext, &g_ws, &res), SFD_ERR_STATE);
     const double z[3] = {0, 0, 0}, q[4] = {1, 0, 0, 0};
     assert_status(sfd_window_start_at(&g_w, 0, z, z, q, z, z), SFD_OK);
-    assert_status(sfd_window_frame(&g_w, 1, NULL, 1, &ext, &res), SFD_ERR_INVAL);
-    assert_status(sfd_window_frame(&g_w, 1, obs, SFD_WINDOW_MAX_TRACKS + 1, &ext, &res),
+    assert_status(sfd_window_frame(&g_w, 1, NULL, 1, &ext, &g_ws, &res), SFD_ERR_INVAL);
+    assert_status(sfd_window_frame(&g_w, 1, obs, 0, &ext, NULL, &res), SFD_ERR_INVAL);
+    assert_status(sfd_window_frame(&g_w, 1, obs, SFD_WINDOW_MAX_TRACKS + 1, &ext, &g_ws, &res),
                   SFD_ERR_INVAL);
     for (int i = 0; i < SFD_WINDOW_MAX_TRACKS; ++i) {
         obs[i].track_id = i;
@@ -697,19 +699,20 @@ static void flagged_tracks_are_dropped_and_capacities_hold(void **state) {
     }
     obs[3].track_id = 2;    /* duplicate id: counted, ignored */
     obs[5].cov_xn[0] = NAN; /* bad value: counted, ignored */
-    assert_status(sfd_window_frame(&g_w, 1, obs, SFD_WINDOW_MAX_TRACKS, &ext, &res), SFD_OK);
+    assert_status(sfd_window_frame(&g_w, 1, obs, SFD_WINDOW_MAX_TRACKS, &ext, &g_ws, &res), SFD_OK);
     assert_int_equal(res.added, SFD_WINDOW_MAX_TRACKS - 2);
     assert_int_equal(res.overflow, 2);
     assert_int_equal(g_w.num_tracks, SFD_WINDOW_MAX_TRACKS - 2);
     /* frame 2: track 7 flagged, the others seen again */
     obs[7].drop = 1;
-    assert_status(sfd_window_frame(&g_w, 2, obs, SFD_WINDOW_MAX_TRACKS, &ext, &res), SFD_OK);
+    assert_status(sfd_window_frame(&g_w, 2, obs, SFD_WINDOW_MAX_TRACKS, &ext, &g_ws, &res), SFD_OK);
     assert_int_equal(res.dropped, 1);
     assert_int_equal(g_w.num_tracks, SFD_WINDOW_MAX_TRACKS - 3);
     /* the window never exceeds L clones, P's dimension stays 15 + 6 L */
     obs[7].drop = 0;
     for (int f = 3; f < 20; ++f) {
-        assert_status(sfd_window_frame(&g_w, f, obs, SFD_WINDOW_MAX_TRACKS, &ext, &res), SFD_OK);
+        assert_status(sfd_window_frame(&g_w, f, obs, SFD_WINDOW_MAX_TRACKS, &ext, &g_ws, &res),
+                      SFD_OK);
         assert_true(g_w.num_clones <= prm.window);
     }
     /* no motion at all: every due track is refused for lack of parallax, never used */

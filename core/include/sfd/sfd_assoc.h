@@ -82,6 +82,19 @@ typedef struct {
     double S_px2[SFD_MAX_FEATURES][3];
 } sfd_assoc_ransac1_work_t;
 
+/**
+ * The method's work space (the method is fixed at init: one member is ever used), owned by the
+ * caller and separate from sfd_assoc_t so that it can share memory with work of other stages
+ * (sfd_nav_t overlays it with the window filter's). It carries data from sfd_assoc_select() to
+ * sfd_assoc_apply() (RANSAC1's per-match covariances): pass the same work space to both, and
+ * touch it in between only through them.
+ */
+typedef union {
+    sfd_assoc_oprf_work_t oprf;
+    sfd_assoc_ransacf_work_t ransacf;
+    sfd_assoc_ransac1_work_t ransac1;
+} sfd_assoc_work_t;
+
 /** Caller-owned association object: parameters, the seeded generator and the per-frame
  *  workspace (no large arrays on the stack). Initialise with sfd_assoc_init(). */
 typedef struct {
@@ -99,12 +112,9 @@ typedef struct {
     uint8_t rescued[SFD_MAX_FEATURES];
     float cur_stat[SFD_MAX_FEATURES];
     float best_stat[SFD_MAX_FEATURES];
-    /** the method's workspace (the method is fixed at init: one member is ever used) */
-    union {
-        sfd_assoc_oprf_work_t oprf;
-        sfd_assoc_ransacf_work_t ransacf;
-        sfd_assoc_ransac1_work_t ransac1;
-    } work;
+    /** private: the caller's work space (sfd_assoc_work_t) during a call of sfd_assoc_select()
+     *  or sfd_assoc_apply(); NULL between calls */
+    sfd_assoc_work_t *work;
     /* between sfd_assoc_select() and sfd_assoc_apply() */
     int32_t selected;      /**< 1 after select, 0 after apply */
     int32_t n;             /**< matches of the selected frame */
@@ -154,14 +164,16 @@ sfd_status_t sfd_assoc_init(sfd_assoc_t *assoc, const sfd_assoc_params_t *params
  * @brief Association proper, without touching the filter: validates every match at the prior,
  *        then runs the method's selection (OPRF/RANSAC1: Table 1 lines 1-7; RANSACF: Table 2;
  *        NONE: all valid). @p out holds the provisional verdicts (set 1).
- *        Follow with sfd_assoc_apply() on the same matches and the unchanged filter. The split
+ *        Follow with sfd_assoc_apply() on the same matches, the same @p work and the unchanged
+ *        filter. The split
  *        lets a caller time association and update separately (SPEC SFD_TIMING stages).
  * @return SFD_OK; SFD_ERR_STATE when @p assoc or @p ekf is not initialized; SFD_ERR_INVAL for
  *         null pointers, n outside [0, SFD_MAX_FEATURES] or a non-finite previous pose.
  */
-sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ekf, const sfd_ekf_camera_t *cam,
-                              const double prev_R_CtoW[9], const double prev_p_CinW_m[3],
-                              const sfd_match_t *matches, int32_t n, sfd_assoc_result_t *out);
+sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, sfd_assoc_work_t *work, const sfd_ekf_t *ekf,
+                              const sfd_ekf_camera_t *cam, const double prev_R_CtoW[9],
+                              const double prev_p_CinW_m[3], const sfd_match_t *matches, int32_t n,
+                              sfd_assoc_result_t *out);
 
 /**
  * @brief Completes a selection: OPRF's individual-compatibility gate on set 1 (an sfd addition,
@@ -173,8 +185,9 @@ sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, const sfd_ekf_t *ekf, const sf
  *         SFD_ERR_STATE without a preceding select, when @p n differs from the selection's, or
  *         when the filter changed since the selection; SFD_ERR_INVAL for null pointers.
  */
-sfd_status_t sfd_assoc_apply(sfd_assoc_t *assoc, sfd_ekf_t *ekf, const sfd_ekf_camera_t *cam,
-                             const sfd_match_t *matches, int32_t n, sfd_assoc_result_t *out);
+sfd_status_t sfd_assoc_apply(sfd_assoc_t *assoc, sfd_assoc_work_t *work, sfd_ekf_t *ekf,
+                             const sfd_ekf_camera_t *cam, const sfd_match_t *matches, int32_t n,
+                             sfd_assoc_result_t *out);
 
 /**
  * @brief sfd_assoc_select() then sfd_assoc_apply(): judges the matches of one frame and updates
@@ -195,9 +208,10 @@ sfd_status_t sfd_assoc_apply(sfd_assoc_t *assoc, sfd_ekf_t *ekf, const sfd_ekf_c
  *         SFD_ERR_STATE when @p assoc or @p ekf is not initialized; SFD_ERR_INVAL for null
  *         pointers, n outside [0, SFD_MAX_FEATURES] or a non-finite previous pose.
  */
-sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_ekf_t *ekf, const sfd_ekf_camera_t *cam,
-                           const double prev_R_CtoW[9], const double prev_p_CinW_m[3],
-                           const sfd_match_t *matches, int32_t n, sfd_assoc_result_t *out);
+sfd_status_t sfd_assoc_run(sfd_assoc_t *assoc, sfd_assoc_work_t *work, sfd_ekf_t *ekf,
+                           const sfd_ekf_camera_t *cam, const double prev_R_CtoW[9],
+                           const double prev_p_CinW_m[3], const sfd_match_t *matches, int32_t n,
+                           sfd_assoc_result_t *out);
 
 #ifdef __cplusplus
 }

@@ -5,12 +5,13 @@
  *        this header is included (all translation units of one build must agree).
  *
  * Memory cost at 256 features and L = 5 (x86-64, printed by the `proof.state_sizes` test):
- * sfd_parity_t 116000 B (the sliding window of observations, linear in SFD_MAX_FEATURES *
- * SFD_MAX_WINDOW), sfd_landmark_map_t 72376 B (SFD_MAX_LANDMARKS = 512), sfd_assoc_t 19728 B,
- * sfd_ekf_t 2000 B: 211824 B for the detectors with the single-state EKF, which that test checks
- * against SPEC's 256 KiB (also at compile time, so the cross builds prove it). The whole pipeline
- * with the sliding-window filter (sfd_pipeline_t) is 492240 B, over that budget
- * (core/docs/pipeline.md "Memory"). Stack per call is bounded separately (`proof.stack_usage`).
+ * sfd_parity_t 128336 B (the sliding window of observations, linear in SFD_MAX_FEATURES *
+ * SFD_MAX_WINDOW), sfd_landmark_map_t 72376 B (SFD_MAX_LANDMARKS = 512), sfd_assoc_t 4384 B
+ * with its work space sfd_assoc_work_t 14336 B, sfd_ekf_t 2000 B: 223152 B for the detectors
+ * with the single-state EKF, which that test checks against SPEC's 256 KiB (also at compile
+ * time, so the cross builds prove it). The whole pipeline with the sliding-window filter
+ * (sfd_pipeline_t) is 454624 B, over that budget (core/docs/pipeline.md "Memory"). Stack per
+ * call is bounded separately (`proof.stack_usage`).
  */
 #ifndef SFD_CONFIG_H
 #define SFD_CONFIG_H

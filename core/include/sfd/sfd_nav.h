@@ -78,11 +78,8 @@ typedef struct {
     sfd_params_t params;
     sfd_ekf_t ekf; /**< window_filter: the window filter's IMU state (sfd_window_to_ekf), read
                         by the association methods, the landmark map and SFD_STATE */
-    sfd_ekf_t ekf_scratch; /**< window_filter: the association's update runs on this copy (its
-                                verdicts count; the window filter makes the update) */
     sfd_window_t win;
     sfd_window_result_t win_result; /**< of the last frame */
-    sfd_window_obs_t win_obs[SFD_MAX_FEATURES];
     sfd_rest_t rest;
     int64_t win_gated;   /**< tracks the window filter's gate refused since init */
     int64_t win_used;    /**< tracks it used */
@@ -98,7 +95,22 @@ typedef struct {
     sfd_ekf_camera_t ekf_cam;
     /* the current frame */
     int32_t num_matches;
-    sfd_match_t matches[SFD_MAX_FEATURES];
+    /** Per-frame work, overlaid: the association's part lives from sfd_nav_build() to the
+     *  association's update (sfd_pipeline_associate -> apply in sfd_pipeline_update); the
+     *  window filter's part from its parity tests (sfd_pipeline_detect) and again in
+     *  sfd_nav_finish(), after the association's update. Nothing in it survives a frame. */
+    union {
+        struct {
+            sfd_match_t matches[SFD_MAX_FEATURES]; /**< filled by sfd_nav_build() */
+            sfd_ekf_t ekf; /**< window_filter: the association's update runs on this copy (its
+                                verdicts count; the window filter makes the update) */
+            sfd_assoc_work_t scratch; /**< the method's work space, select to apply */
+        } assoc;
+        struct {
+            sfd_window_obs_t obs[SFD_MAX_FEATURES]; /**< the frame handed to the filter */
+            sfd_window_scratch_t scratch;           /**< its tests' and update's work space */
+        } window;
+    } work;
     int32_t match_feature[SFD_MAX_FEATURES]; /**< feature index of each match */
     int32_t feature_match[SFD_MAX_FEATURES]; /**< match index of each feature, -1 for none */
     double xn[SFD_MAX_FEATURES][2];          /**< normalized undistorted coordinates */
@@ -165,7 +177,7 @@ sfd_status_t sfd_nav_start_at(sfd_nav_t *nav, int64_t utime, const double p_m[3]
 
 /**
  * @brief Matches of the frame: features (not excluded by @p skip, nullable) whose track was in
- *        the previous frame and has a landmark. Fills nav->matches / match_feature /
+ *        the previous frame and has a landmark. Fills nav->work.assoc.matches / match_feature /
  *        feature_match; undistorts every feature with @p cam.
  * @param parity nullable: a detector that has just judged this frame with the same camera; the
  *        coordinates it computed are taken from it (sfd_parity_newest_xn(), bit-identical), and

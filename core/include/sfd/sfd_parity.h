@@ -307,11 +307,13 @@ sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
  * translation_known = 0) this is sfd_parity_push_frame(), and with translation_known the verdict
  * carries SFD_FLAG_TRANSLATION_UNKNOWN when the unknown-translation test judged the frame.
  *
- * @param filter may be NULL; @p ext the camera's pose in the IMU frame (required with a filter).
+ * @param filter may be NULL; @p scratch the filter's work space for the tests and @p ext the
+ *        camera's pose in the IMU frame (both required with a filter).
  * @return as sfd_parity_push_frame().
  */
 sfd_status_t sfd_parity_push_frame_filter(sfd_parity_t *det, const sfd_frame_t *frame,
                                           const sfd_frame_motion_t *motion, sfd_window_t *filter,
+                                          sfd_window_scratch_t *scratch,
                                           const sfd_extrinsics_t *ext, sfd_verdict_t *out);
 
 #ifdef __cplusplus

@@ -40,7 +40,8 @@
  * Capacities: SFD_MAX_WINDOW clones, SFD_WINDOW_MAX_TRACKS tracks of up to SFD_MAX_WINDOW
  * observations. Overflow is counted and the observation ignored, never written past an array.
  * No heap, no global state, no recursion; every loop has a fixed bound. The filter is large
- * (sizeof(sfd_window_t), ~0.17 MiB at the defaults): declare it static or inside a static owner.
+ * (sizeof(sfd_window_t), ~82 KiB at the defaults, plus the caller's sfd_window_scratch_t,
+ * ~53 KiB): declare them static or inside a static owner.
  */
 #ifndef SFD_WINDOW_H
 #define SFD_WINDOW_H
@@ -167,14 +168,23 @@ typedef struct {
     sfd_window_track_t tracks[SFD_WINDOW_MAX_TRACKS];
     int16_t index[SFD_WINDOW_INDEX_SLOTS]; /**< track id -> tracks[] entry, -1 empty */
     uint32_t numeric_faults;               /**< updates or propagations refused */
-    /* scratch of one frame (no content kept between calls; after sfd_window_frame, scratch_track
-     * holds the last track of that frame that reached the projection when its projected is 1,
-     * with the clone columns of before the frame's marginalization: unit.window reads it) */
-    sfd_msckf_track_t scratch_track;
-    sfd_msckf_stack_t scratch_stack;
-    sfd_msckf_work_t scratch_work;
-    double scratch_dx[SFD_MSCKF_DIM];
 } sfd_window_t;
+
+/**
+ * Work space of one call of sfd_window_frame() or sfd_window_test_track(), owned by the caller
+ * and separate from sfd_window_t so that a caller can overlay it with other per-frame work
+ * (sfd_nav_t shares it with the association's matches, which are dead by then). No content is
+ * kept between calls: any scratch of the right type will do, but one scratch must not serve two
+ * calls at once. After sfd_window_frame, track holds the last track of that frame that reached
+ * the projection when its projected is 1, with the clone columns of before the frame's
+ * marginalization (unit.window reads it).
+ */
+typedef struct {
+    sfd_msckf_track_t track; /**< one track's rows (both calls) */
+    sfd_msckf_stack_t stack; /**< the frame's folded tracks (sfd_window_frame) */
+    sfd_msckf_work_t work;   /**< the update's matrices (sfd_window_frame) */
+    double dx[SFD_MSCKF_DIM];
+} sfd_window_scratch_t;
 
 /** @brief The defaults in parentheses above; noise sfd_ekf_noise_default(); P0 position 1e-6 m^2,
  *         velocity 1e-4 m^2/s^2, roll and pitch 1e-4 rad^2, yaw 1e-6 rad^2, gyro bias 1e-6
@@ -221,12 +231,14 @@ sfd_status_t sfd_window_propagate(sfd_window_t *w, const double gyro_rad_s[3],
  *        observations, the updates of the tracks that are due, marginalization (file comment).
  * @param obs n observations (n <= SFD_WINDOW_MAX_TRACKS; bad ones counted in overflow).
  * @param ext the camera's pose in the IMU frame.
+ * @param scratch the call's work space (required; sfd_window_scratch_t).
  * @param result required.
  * @return SFD_OK (also when nothing was updated; see result->update_status); SFD_ERR_STATE when
  *         not started; SFD_ERR_INVAL for null or n out of range (nothing changed).
  */
 sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime, const sfd_window_obs_t *obs,
-                              int32_t n, const sfd_extrinsics_t *ext, sfd_window_result_t *result);
+                              int32_t n, const sfd_extrinsics_t *ext, sfd_window_scratch_t *scratch,
+                              sfd_window_result_t *result);
 
 /** @brief The IMU state's orientation error covariance in the LOCAL convention of sfd_ekf.h and
  *         the whole IMU state as an sfd_ekf_t (for the association methods' hypotheses, which
@@ -254,15 +266,16 @@ typedef struct {
  *        the point's Jacobian, and gamma = r_o^T (H_o P H_o^T + R_o)^-1 r_o with the filter's
  *        covariance P of the m poses is chi2(dof) for a static, correctly tracked feature. The
  *        Jacobians are at the current estimates. Nothing of the filter changes (the pending
- *        covariance propagation is applied, which is invisible; scratch_track is overwritten).
- * @return SFD_OK with gamma, dof; SFD_ERR_INVAL for null, m out of range, non-finite or not
- *         positive definite input; SFD_ERR_STATE when not started, fewer than m - 1 clones, or a
- *         frame time that is not the filter's; SFD_ERR_NUMERIC when the point cannot be
+ *        covariance propagation is applied, which is invisible; scratch->track is overwritten).
+ * @return SFD_OK with gamma, dof; SFD_ERR_INVAL for null (scratch included), m out of range,
+ * non-finite or not positive definite input; SFD_ERR_STATE when not started, fewer than m - 1
+ * clones, or a frame time that is not the filter's; SFD_ERR_NUMERIC when the point cannot be
  *         triangulated (no parallax without a depth prior, behind a camera, out of
  *         [min_depth_m, max_depth_m]) or the test's covariance is not positive definite.
  */
 sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
-                                   const sfd_window_test_obs_t *obs, double *gamma, int32_t *dof);
+                                   const sfd_window_test_obs_t *obs, sfd_window_scratch_t *scratch,
+                                   double *gamma, int32_t *dof);
 
 /** @brief Position variance (m^2, x y z) of the IMU state. SFD_ERR_STATE when not started. */
 sfd_status_t sfd_window_position_var(sfd_window_t *w, double var_m2[3]);
