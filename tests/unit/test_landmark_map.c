@@ -128,7 +128,7 @@ static double chi2_wh(double k, double z) {
     return k * b * b * b;
 }
 
-/* The map is ~70 KiB: file scope, as a caller would declare it. Canaries around it catch a
+/* The map is ~36 KiB: file scope, as a caller would declare it. Canaries around it catch a
  * write past its arrays. */
 static struct {
     uint64_t before[8];

@@ -6,11 +6,11 @@
  *
  * Memory cost at 256 features and L = 5 (x86-64, printed by the `proof.state_sizes` test):
  * sfd_parity_t 128336 B (the sliding window of observations, linear in SFD_MAX_FEATURES *
- * SFD_MAX_WINDOW), sfd_landmark_map_t 72376 B (SFD_MAX_LANDMARKS = 512), sfd_assoc_t 4384 B
- * with its work space sfd_assoc_work_t 14336 B, sfd_ekf_t 2000 B: 223152 B for the detectors
+ * SFD_MAX_WINDOW), sfd_landmark_map_t 36536 B (SFD_MAX_LANDMARKS = 256), sfd_assoc_t 4384 B
+ * with its work space sfd_assoc_work_t 14336 B, sfd_ekf_t 2000 B: 187312 B for the detectors
  * with the single-state EKF, which that test checks against SPEC's 256 KiB (also at compile
  * time, so the cross builds prove it). The whole pipeline with the sliding-window filter
- * (sfd_pipeline_t) is 454624 B, over that budget (core/docs/pipeline.md "Memory"). Stack per
+ * (sfd_pipeline_t) is 418784 B, over that budget (core/docs/pipeline.md "Memory"). Stack per
  * call is bounded separately (`proof.stack_usage`).
  */
 #ifndef SFD_CONFIG_H
@@ -43,12 +43,16 @@
 #define SFD_CHI2_MAX_DOF 64
 #endif
 
-/** Landmarks the node's map holds (sfd_landmarks.h): one per live track, with room for tracks
- *  that drop out and come back. Cost: 128 bytes per landmark plus 12 bytes of index, i.e.
- *  ~70 KiB at the default 512; find/insert/remove are O(1) on average and O(SFD_MAX_LANDMARKS)
- *  in the worst case. */
+/** Landmarks the node's map holds (sfd_landmarks.h): one per track of a frame. A match needs
+ *  its track in the previous frame and a landmark, and a full map evicts the least recently
+ *  seen landmark, so the tracks of one frame (at most SFD_MAX_FEATURES) keep theirs; a track
+ *  that drops out and comes back keeps its landmark while the frames leave room (the default
+ *  was 2 * SFD_MAX_FEATURES until 2026-11-26: replays of every sfd-sim log scenario are
+ *  byte-identical with either). Cost: 128 bytes per landmark plus 12 bytes of index, i.e.
+ *  ~35 KiB at the default 256; find/insert/remove are O(1) on average and
+ *  O(SFD_MAX_LANDMARKS) in the worst case. */
 #ifndef SFD_MAX_LANDMARKS
-#define SFD_MAX_LANDMARKS (2 * SFD_MAX_FEATURES)
+#define SFD_MAX_LANDMARKS (SFD_MAX_FEATURES)
 #endif
 
 /** Most linearizations of one landmark refinement (iterated EKF, sfd_landmark_refine); 1 is the

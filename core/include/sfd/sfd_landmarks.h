@@ -52,7 +52,7 @@ typedef struct {
     uint8_t fixed;           /**< 1: a known landmark (sfd_landmark_set): never refined */
 } sfd_landmark_t;
 
-/** The map. Caller-owned (declare it static: it is ~70 KiB at the default capacity);
+/** The map. Caller-owned (declare it static: it is ~36 KiB at the default capacity);
  *  initialise with sfd_landmark_map_init(). */
 typedef struct {
     sfd_landmark_t entries[SFD_MAX_LANDMARKS];
