@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: MIT
 // The parity-space detector: sliding window of tracked features, deterministic grouping, group
 // tests, isolation inside failing groups, verdicts (sfd/sfd_parity.h, core/docs/parity_space.md).
+#include <cmath>
+#include <limits>
+
 #include "core_private.hpp"
 #include "parity_space.hpp"
 #include "rotation.hpp"
@@ -36,13 +39,16 @@ void hash_insert(int16_t *table, int64_t id, int16_t index) {
     (void)sfd_track_index_insert(&t, id, index);
 }
 
+// Largest magnitude the ring stores as float (FLT_MAX, as a double).
+constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
+
 // Spread-out ordering key: Morton (Z-order) code of the pixel position in 16-px cells. Walking
 // the Z-curve visits the image region by region, so taking every G-th feature of that walk puts
 // features of different regions into one group.
-uint32_t morton_key(const double uv[2]) {
+uint32_t morton_key(const float uv[2]) {
     uint32_t c[2];
     for (int k = 0; k < 2; ++k) {
-        double v = uv[k] / 16.0;
+        double v = static_cast<double>(uv[k]) / 16.0;
         v = (v < 0.0) ? 0.0 : ((v > 65535.0) ? 65535.0 : v);
         c[k] = static_cast<uint32_t>(v);
     }
@@ -105,12 +111,13 @@ void load_window_feature(const sfd_parity_t &det, const Window &w, int i, Featur
     index[L - 1] = i;
     for (int t = L - 1; t > 0; --t) index[t - 1] = det.frames[w.fidx[t]].obs[index[t]].prev;
     const sfd_parity_obs_t &o0 = det.frames[w.fidx[0]].obs[index[0]];
+    const double s2 = det.params.pixel_sigma_px * det.params.pixel_sigma_px;
     const double m0[3] = {o0.depth_m * o0.xn[0], o0.depth_m * o0.xn[1], o0.depth_m};
     for (int t = 0; t < L; ++t) {
         const sfd_parity_obs_t &o = det.frames[w.fidx[t]].obs[index[t]];
         fw->y[t][0] = o.xn[0];
         fw->y[t][1] = o.xn[1];
-        for (int c = 0; c < 3; ++c) fw->cov_y[t][c] = o.cov_xn[c];
+        for (int c = 0; c < 3; ++c) fw->cov_y[t][c] = s2 * static_cast<double>(o.jjt_px2[c]);
         fw->depth[t] = o.depth_m;
         fw->depth_var[t] = o.depth_var_m2;
         fw->y_dir[t][0] = o.xn[0];
@@ -383,7 +390,6 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
                                  ? motion->p_CcurInCprev_m[k]
                                  : 0.0;
     }
-    const double s2 = det->params.pixel_sigma_px * det->params.pixel_sigma_px;
     for (int i = 0; i < frame->num_features; ++i) {
         const sfd_feature_t &f = frame->features[i];
         sfd_parity_obs_t &o = nf.obs[i];
@@ -413,12 +419,21 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
             out->flags |= SFD_FLAG_BAD_FEATURES;
             continue;
         }
-        // Cov(xn) = sigma^2 J J^T with J = d xn / d uv.
-        o.cov_xn[0] = s2 * (J[0] * J[0] + J[1] * J[1]);
-        o.cov_xn[1] = s2 * (J[0] * J[2] + J[1] * J[3]);
-        o.cov_xn[2] = s2 * (J[2] * J[2] + J[3] * J[3]);
-        o.uv_px[0] = f.u_px;
-        o.uv_px[1] = f.v_px;
+        // Cov(xn) = sigma^2 J J^T with J = d xn / d uv; J J^T is stored (float: a relative
+        // 6e-8 of the covariance, far below what the tests resolve) and sigma^2 applied on load.
+        // A J J^T beyond float's range (a distortion model near its fold) is bad input.
+        const double jjt[3] = {J[0] * J[0] + J[1] * J[1], J[0] * J[2] + J[1] * J[3],
+                               J[2] * J[2] + J[3] * J[3]};
+        if (!(std::fabs(jjt[0]) <= kFloatMax && std::fabs(jjt[1]) <= kFloatMax &&
+              std::fabs(jjt[2]) <= kFloatMax)) {
+            v.reason = SFD_REASON_BAD_INPUT;
+            out->flags |= SFD_FLAG_BAD_FEATURES;
+            continue;
+        }
+        for (int c = 0; c < 3; ++c) o.jjt_px2[c] = static_cast<float>(jjt[c]);
+        // the grouping's pixels, clamped into float's range (morton_key clamps further)
+        o.uv_px[0] = static_cast<float>(std::fmin(std::fmax(f.u_px, -kFloatMax), kFloatMax));
+        o.uv_px[1] = static_cast<float>(std::fmin(std::fmax(f.v_px, -kFloatMax), kFloatMax));
         const bool prior = std::isfinite(f.depth_m) && f.depth_m > 0.0 &&
                            std::isfinite(f.depth_var_m2) && f.depth_var_m2 >= 0.0;
         o.depth_m = prior ? f.depth_m : det->params.default_depth_m;
@@ -458,6 +473,7 @@ void update_noise_scale(sfd_parity_t &det, float *u, int n) {
 // Loads feature i of the newest frame over its newest m frames into obs (oldest first), with the
 // pixel noise variance scaled by `scale`; the depth prior is the newest observation's.
 void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_test_obs_t *obs) {
+    const double scale_px2 = scale * det.params.pixel_sigma_px * det.params.pixel_sigma_px;
     obs->frames = m;
     int index = i;
     for (int t = m - 1; t >= 0; --t) {
@@ -466,7 +482,8 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
         obs->utime[t] = fr.utime;
         obs->xn[t][0] = o.xn[0];
         obs->xn[t][1] = o.xn[1];
-        for (int c = 0; c < 3; ++c) obs->cov_xn[t][c] = scale * o.cov_xn[c];
+        for (int c = 0; c < 3; ++c)
+            obs->cov_xn[t][c] = scale_px2 * static_cast<double>(o.jjt_px2[c]);
         index = o.prev;
     }
     const sfd_parity_obs_t &newest = det.frames[det.head].obs[i];

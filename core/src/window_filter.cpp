@@ -3,6 +3,9 @@
 // propagation with observability-constrained (default) or first-estimate Jacobians, cloning,
 // track bookkeeping, triangulation over the window, the gated null-space update
 // (msckf_update.cpp) and marginalization of the oldest clone.
+#include <cmath>
+#include <limits>
+
 #include "core_private.hpp"
 
 #include <Eigen/Cholesky>
@@ -217,6 +220,35 @@ bool inv2(const double c[3], Mat2 *out) {
     const double det = la::det_2x2(c[0], c[1], c[1], c[2]);
     if (!(c[0] > 0.0) || !(det > 0.0) || !std::isfinite(det)) return false;
     *out = la::inverse_2x2(c[0], c[1], c[1], c[2], det);
+    return true;
+}
+
+/// inv2() of a covariance stored as float.
+bool inv2(const float c[3], Mat2 *out) {
+    const double cd[3] = {static_cast<double>(c[0]), static_cast<double>(c[1]),
+                          static_cast<double>(c[2])};
+    return inv2(cd, out);
+}
+
+/// Largest magnitude a track stores (FLT_MAX, as a double).
+constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
+
+/// One observation into a track's float storage: false (nothing written) unless every value
+/// is finite and within float's range and the stored covariance is positive definite.
+bool store_observation(const double xn[2], const double cov[3], float xn_out[2], float cov_out[3]) {
+    for (int e = 0; e < 2; ++e) {
+        if (!(std::fabs(xn[e]) <= kFloatMax)) return false;
+    }
+    for (int e = 0; e < 3; ++e) {
+        if (!(std::fabs(cov[e]) <= kFloatMax)) return false;
+    }
+    float x[2], c[3];
+    for (int e = 0; e < 2; ++e) x[e] = static_cast<float>(xn[e]);
+    for (int e = 0; e < 3; ++e) c[e] = static_cast<float>(cov[e]);
+    Mat2 W;
+    if (!inv2(c, &W)) return false;
+    for (int e = 0; e < 2; ++e) xn_out[e] = x[e];
+    for (int e = 0; e < 3; ++e) cov_out[e] = c[e];
     return true;
 }
 
@@ -821,9 +853,10 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
             w->num_tracks++;
         }
         const int u = t->used;
-        t->xn[u][0] = o.xn[0];
-        t->xn[u][1] = o.xn[1];
-        for (int e = 0; e < 3; ++e) t->cov_xn[u][e] = o.cov_xn[e];
+        if (!store_observation(o.xn, o.cov_xn, t->xn[u], t->cov_xn[u])) {
+            result->overflow++;  // beyond float's range (a new track stays empty: deleted)
+            continue;
+        }
         t->used = u + 1;
         t->seen = 1;
         result->added++;
@@ -958,12 +991,10 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
     std::memset(&t, 0, sizeof t);
     t.used = m;
     for (int k = 0; k < m; ++k) {
-        if (!all_finite(obs->xn[k], 2) || !all_finite(obs->cov_xn[k], 3)) return SFD_ERR_INVAL;
-        Mat2 Winv;
-        if (!inv2(obs->cov_xn[k], &Winv)) return SFD_ERR_INVAL;
-        t.xn[k][0] = obs->xn[k][0];
-        t.xn[k][1] = obs->xn[k][1];
-        for (int e = 0; e < 3; ++e) t.cov_xn[k][e] = obs->cov_xn[k][e];
+        if (!all_finite(obs->xn[k], 2) || !all_finite(obs->cov_xn[k], 3) ||
+            !store_observation(obs->xn[k], obs->cov_xn[k], t.xn[k], t.cov_xn[k])) {
+            return SFD_ERR_INVAL;
+        }
     }
     const bool depth_row = w->prm.use_depth_prior && std::isfinite(obs->depth_m) &&
                            obs->depth_m > 0.0 && std::isfinite(obs->depth_var_m2) &&

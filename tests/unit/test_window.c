@@ -699,15 +699,18 @@ static void flagged_tracks_are_dropped_and_capacities_hold(void **state) {
     }
     obs[3].track_id = 2;    /* duplicate id: counted, ignored */
     obs[5].cov_xn[0] = NAN; /* bad value: counted, ignored */
+    /* valid in double, not in the tracks' float storage: counted, ignored */
+    obs[9].xn[1] = 1e39;                           /* beyond float's range */
+    obs[11].cov_xn[0] = obs[11].cov_xn[2] = 1e-50; /* positive definite, 0 in float */
     assert_status(sfd_window_frame(&g_w, 1, obs, SFD_WINDOW_MAX_TRACKS, &ext, &g_ws, &res), SFD_OK);
-    assert_int_equal(res.added, SFD_WINDOW_MAX_TRACKS - 2);
-    assert_int_equal(res.overflow, 2);
-    assert_int_equal(g_w.num_tracks, SFD_WINDOW_MAX_TRACKS - 2);
+    assert_int_equal(res.added, SFD_WINDOW_MAX_TRACKS - 4);
+    assert_int_equal(res.overflow, 4);
+    assert_int_equal(g_w.num_tracks, SFD_WINDOW_MAX_TRACKS - 4);
     /* frame 2: track 7 flagged, the others seen again */
     obs[7].drop = 1;
     assert_status(sfd_window_frame(&g_w, 2, obs, SFD_WINDOW_MAX_TRACKS, &ext, &g_ws, &res), SFD_OK);
     assert_int_equal(res.dropped, 1);
-    assert_int_equal(g_w.num_tracks, SFD_WINDOW_MAX_TRACKS - 3);
+    assert_int_equal(g_w.num_tracks, SFD_WINDOW_MAX_TRACKS - 5);
     /* the window never exceeds L clones, P's dimension stays 15 + 6 L */
     obs[7].drop = 0;
     for (int f = 3; f < 20; ++f) {

@@ -202,20 +202,23 @@ typedef struct {
     sfd_feature_result_t features[SFD_MAX_FEATURES];
 } sfd_verdict_t;
 
-/** Window storage of one observation (plain data; fields are private to the detector). */
+/** Window storage of one observation (plain data; fields are private to the detector; 72 B,
+ *  the doubles first so that the floats and shorts pack without padding). */
 typedef struct {
     int64_t track_id;
-    double xn[2];     /* undistorted normalized coordinates */
-    double cov_xn[3]; /* pixel noise carried into normalized coordinates: xx, xy, yy */
-    double uv_px[2];  /* raw pixels, for the spatial grouping */
+    double xn[2]; /* undistorted normalized coordinates */
     double depth_m;
     double depth_var_m2;
-    int16_t prev;    /* index of this track in the previous frame, -1 none */
-    int16_t run;     /* consecutive frames observed, this one included (saturating) */
-    int16_t valid;   /* 1 usable, 0 rejected input */
-    int16_t prior;   /* 1: depth_m, depth_var_m2 are the wire's prior; 0: the configured default */
-    int16_t segment; /* observations since the track's last alarm, this one included
-                        (saturating at SFD_MAX_WINDOW; the evidence test's window) */
+    float jjt_px2[3]; /* J J^T with J = d xn / d uv (xx, xy, yy): Cov(xn) per px^2 of pixel
+                         noise variance, i.e. Cov(xn) = pixel_sigma_px^2 jjt_px2 (stored without
+                         the sigma so that float storage cannot underflow at any valid sigma) */
+    float uv_px[2];   /* raw pixels, for the spatial grouping (clamped to float's range) */
+    int16_t prev;     /* index of this track in the previous frame, -1 none */
+    int16_t run;      /* consecutive frames observed, this one included (saturating) */
+    int16_t valid;    /* 1 usable, 0 rejected input */
+    int16_t prior;    /* 1: depth_m, depth_var_m2 are the wire's prior; 0: the configured default */
+    int16_t segment;  /* observations since the track's last alarm, this one included
+                         (saturating at SFD_MAX_WINDOW; the evidence test's window) */
 } sfd_parity_obs_t;
 
 typedef struct {

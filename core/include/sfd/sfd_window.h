@@ -40,7 +40,7 @@
  * Capacities: SFD_MAX_WINDOW clones, SFD_WINDOW_MAX_TRACKS tracks of up to SFD_MAX_WINDOW
  * observations. Overflow is counted and the observation ignored, never written past an array.
  * No heap, no global state, no recursion; every loop has a fixed bound. The filter is large
- * (sizeof(sfd_window_t), ~82 KiB at the defaults, plus the caller's sfd_window_scratch_t,
+ * (sizeof(sfd_window_t), ~58 KiB at the defaults, plus the caller's sfd_window_scratch_t,
  * ~53 KiB): declare them static or inside a static owner.
  */
 #ifndef SFD_WINDOW_H
@@ -124,10 +124,13 @@ typedef struct {
     uint32_t first_clone; /**< sequence number of the clone of observation 0 */
     int32_t seen;         /**< 1: observed in the newest frame */
     int64_t id;
-    double xn[SFD_MAX_WINDOW][2];
-    double cov_xn[SFD_MAX_WINDOW][3];
     double depth_m; /**< depth prior of observation 0, <= 0: none */
     double depth_var_m2;
+    /** the observations, stored as float (a relative 6e-8, far below the pixel noise; an
+     *  observation outside float's range or whose covariance is not positive definite in float
+     *  is refused) and used in double */
+    float xn[SFD_MAX_WINDOW][2];
+    float cov_xn[SFD_MAX_WINDOW][3];
 } sfd_window_track_t;
 
 typedef struct {
