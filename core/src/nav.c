@@ -78,7 +78,7 @@ sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd
         sfd_rest_params_t rp;
         sfd_rest_params_default(&rp);
         rp.gravity_m_s2 = cfg->noise.gravity_m_s2;
-        if (sfd_rest_init(&nav->rest, &rp) != SFD_OK) return SFD_ERR_INVAL;
+        if (sfd_rest_init(&nav->work.rest, &rp) != SFD_OK) return SFD_ERR_INVAL;
     }
     nav->win_gated = 0;
     nav->win_used = 0;
@@ -151,14 +151,14 @@ static int start_window_at_rest(sfd_nav_t *nav, const sfd_imu_span_t *span, int6
     if (blocks > rp.window_blocks) blocks = rp.window_blocks;
     if (blocks < 2) return SFD_REJECT_NONE;
     rp.window_blocks = blocks;
-    if (sfd_rest_init(&nav->rest, &rp) != SFD_OK) return SFD_REJECT_CORE;
+    if (sfd_rest_init(&nav->work.rest, &rp) != SFD_OK) return SFD_REJECT_CORE;
     const int32_t first = n - blocks * rp.block_samples;
     for (int32_t i = first; i < n; ++i) {
         const sfd_imu_sample_t *s = sfd_imu_span_at(span, i);
-        (void)sfd_rest_push(&nav->rest, s->t_us, s->gyro_rad_s, s->accel_m_s2);
+        (void)sfd_rest_push(&nav->work.rest, s->t_us, s->gyro_rad_s, s->accel_m_s2);
     }
     sfd_rest_result_t rr;
-    if (sfd_rest_evaluate(&nav->rest, &rr) != SFD_OK || !rr.ready || !rr.at_rest) {
+    if (sfd_rest_evaluate(&nav->work.rest, &rr) != SFD_OK || !rr.ready || !rr.at_rest) {
         return SFD_REJECT_NONE;
     }
     const double *bias =
@@ -390,8 +390,6 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
         nav->ok[i] = (uint8_t)((parity != NULL && sfd_parity_newest_xn(parity, frame->utime, i,
                                                                        nav->xn[i]) == SFD_OK) ||
                                sfd_camera_undistort(cam, uv_raw, nav->xn[i], NULL) == SFD_OK);
-        nav->uv[i][0] = cam->fx_px * nav->xn[i][0] + cam->cx_px;
-        nav->uv[i][1] = cam->fy_px * nav->xn[i][1] + cam->cy_px;
         if (nav->ok[i])
             nav->ok[i] = (uint8_t)pixel_noise_xn(cam, nav->params.pixel_sigma_px, nav->xn[i],
                                                  nav->cov_xn[i]);
@@ -407,7 +405,9 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
         sfd_match_t *m = &nav->work.assoc.matches[nav->num_matches];
         m->prev_uv_px[0] = nav->prev_uv[p][0];
         m->prev_uv_px[1] = nav->prev_uv[p][1];
-        if (sfd_landmark_to_obs(&nav->map, li, nav->uv[i], &m->obs) != SFD_OK) continue;
+        const double uv[2] = {cam->fx_px * nav->xn[i][0] + cam->cx_px,
+                              cam->fy_px * nav->xn[i][1] + cam->cy_px}; /* undistorted pixel */
+        if (sfd_landmark_to_obs(&nav->map, li, uv, &m->obs) != SFD_OK) continue;
         /* The pixel noise of both observations through the distortion Jacobian (C = I + dC,
          * sfd_camera_pixel_noise()): the previous one's from its undistorted pixel, recomputed
          * here instead of kept per feature (the camera is the same: a new calibration drops the
@@ -499,8 +499,8 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *stat
         if (!nav->ok[i]) continue;
         const int64_t id = frame->features[i].track_id;
         double *uv = nav->prev_uv[nav->prev_n];
-        uv[0] = nav->uv[i][0];
-        uv[1] = nav->uv[i][1];
+        uv[0] = nav->ekf_cam.fx_px * nav->xn[i][0] + nav->ekf_cam.cx_px; /* undistorted */
+        uv[1] = nav->ekf_cam.fy_px * nav->xn[i][1] + nav->ekf_cam.cy_px;
         if (status[i] == SFD_VERDICT_SPURIOUS) {
             /* a flagged observation of a known landmark: the next frame's epipolar test starts
              * from where the landmark projects now, not from the flagged pixel */

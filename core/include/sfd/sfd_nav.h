@@ -80,13 +80,12 @@ typedef struct {
                         by the association methods, the landmark map and SFD_STATE */
     sfd_window_t win;
     sfd_window_result_t win_result; /**< of the last frame */
-    sfd_rest_t rest;
-    int64_t win_gated;   /**< tracks the window filter's gate refused since init */
-    int64_t win_used;    /**< tracks it used */
-    int64_t ekf_utime;   /**< time the filter state refers to (us) */
-    int32_t ready;       /**< 1 once started from gravity */
-    int32_t starts;      /**< times the filter was (re)started */
-    int32_t have_truth0; /**< init_from_truth: the first TRUTH pose is held */
+    int64_t win_gated;              /**< tracks the window filter's gate refused since init */
+    int64_t win_used;               /**< tracks it used */
+    int64_t ekf_utime;              /**< time the filter state refers to (us) */
+    int32_t ready;                  /**< 1 once started from gravity */
+    int32_t starts;                 /**< times the filter was (re)started */
+    int32_t have_truth0;            /**< init_from_truth: the first TRUTH pose is held */
     int64_t truth0_utime;
     double truth0_p[3];
     sfd_assoc_t assoc;
@@ -98,7 +97,8 @@ typedef struct {
     /** Per-frame work, overlaid: the association's part lives from sfd_nav_build() to the
      *  association's update (sfd_pipeline_associate -> apply in sfd_pipeline_update); the
      *  window filter's part from its parity tests (sfd_pipeline_detect) and again in
-     *  sfd_nav_finish(), after the association's update. Nothing in it survives a frame. */
+     *  sfd_nav_finish(), after the association's update; the rest detector's within one
+     *  sfd_nav_advance() before the filter starts. Nothing in it survives a call or a frame. */
     union {
         struct {
             sfd_match_t matches[SFD_MAX_FEATURES]; /**< filled by sfd_nav_build() */
@@ -110,11 +110,13 @@ typedef struct {
             sfd_window_obs_t obs[SFD_MAX_FEATURES]; /**< the frame handed to the filter */
             sfd_window_scratch_t scratch;           /**< its tests' and update's work space */
         } window;
+        /** the rest detector of a start at rest: filled and evaluated within one call of
+         *  sfd_nav_advance() while the filter is not running (no window work then) */
+        sfd_rest_t rest;
     } work;
     int32_t match_feature[SFD_MAX_FEATURES]; /**< feature index of each match */
     int32_t feature_match[SFD_MAX_FEATURES]; /**< match index of each feature, -1 for none */
     double xn[SFD_MAX_FEATURES][2];          /**< normalized undistorted coordinates */
-    double uv[SFD_MAX_FEATURES][2];          /**< undistorted pixels */
     uint8_t ok[SFD_MAX_FEATURES];            /**< undistortion succeeded */
     double cov_xn[SFD_MAX_FEATURES][3]; /**< covariance of xn: pixel noise through the distortion
                                              Jacobian (xx, xy, yy) */
