@@ -354,7 +354,7 @@ static void window_frame(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t 
     int32_t n = 0;
     for (int32_t i = 0; i < frame->num_features && n < SFD_MAX_FEATURES; ++i) {
         if (!nav->ok[i]) continue;
-        sfd_window_obs_t *o = &nav->work.window.obs[n++];
+        sfd_window_obs_t *o = &nav->work.window.u.obs[n++];
         o->track_id = frame->features[i].track_id;
         o->xn[0] = nav->xn[i][0];
         o->xn[1] = nav->xn[i][1];
@@ -368,8 +368,8 @@ static void window_frame(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t 
         o->drop = status[i] == SFD_VERDICT_SPURIOUS;
     }
     sfd_window_result_t *r = &nav->win_result;
-    if (sfd_window_frame(&nav->win, frame->utime, nav->work.window.obs, n, &nav->ekf_cam.ext,
-                         &nav->work.window.scratch, r) != SFD_OK ||
+    if (sfd_window_frame(&nav->win, frame->utime, nav->work.window.u.obs, n, &nav->ekf_cam.ext,
+                         &nav->work.window, r) != SFD_OK ||
         r->update_status != SFD_OK || sfd_window_to_ekf(&nav->win, &nav->ekf) != SFD_OK) {
         nav->ready = 0; /* restart at rest later */
         return;

@@ -423,8 +423,8 @@ static void run_parity(sfd_pipeline_t *p, const sfd_frame_t *frame, int imu_reas
     }
     /* Known translation from the window filter once it runs and was advanced to this frame. */
     sfd_window_t *win = (p->cfg.nav.window_filter && p->nav_ok) ? &p->nav.win : NULL;
-    if (sfd_parity_push_frame_filter(&p->parity, frame, mp, win, &p->nav.work.window.scratch,
-                                     &p->ext, &p->out.verdict) != SFD_OK) {
+    if (sfd_parity_push_frame_filter(&p->parity, frame, mp, win, &p->nav.work.window, &p->ext,
+                                     &p->out.verdict) != SFD_OK) {
         sfd_pipeline_count_reject(p, SFD_REJECT_CORE);
         sfd_parity_reset(&p->parity);
         untested_verdict(&p->out.verdict, frame);

@@ -862,6 +862,7 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
         result->added++;
     }
 
+    // Every observation is read (obs may be scratch->u.obs, which the update below overwrites).
     // Tracks due: ended (not seen now), or reaching the oldest clone of a full window.
     const bool full = w->num_clones >= w->prm.window;
     const uint32_t oldest = w->clones[0].seq;
@@ -905,7 +906,7 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
     result->update_status = SFD_OK;
     if (scratch->stack.folded > 0) {
         const sfd_status_t st =
-            sfd_msckf_update(&scratch->stack, &w->P[0][0], scratch->dx, &scratch->work);
+            sfd_msckf_update(&scratch->stack, &w->P[0][0], scratch->dx, &scratch->u.work);
         if (st != SFD_OK || !inject(w, scratch->dx)) {
             w->numeric_faults++;
             result->update_status = (st != SFD_OK) ? st : SFD_ERR_NUMERIC;

@@ -10,7 +10,7 @@
  * with its work space sfd_assoc_work_t 14336 B, sfd_ekf_t 2000 B: 156592 B for the detectors
  * with the single-state EKF, which that test checks against SPEC's 256 KiB (also at compile
  * time, so the cross builds prove it). The whole pipeline with the sliding-window filter
- * (sfd_pipeline_t) is 355152 B, over that budget (core/docs/pipeline.md "Memory"). Stack per
+ * (sfd_pipeline_t) is 337288 B, over that budget (core/docs/pipeline.md "Memory"). Stack per
  * call is bounded separately (`proof.stack_usage`).
  */
 #ifndef SFD_CONFIG_H

@@ -106,10 +106,9 @@ typedef struct {
                                 verdicts count; the window filter makes the update) */
             sfd_assoc_work_t scratch; /**< the method's work space, select to apply */
         } assoc;
-        struct {
-            sfd_window_obs_t obs[SFD_MAX_FEATURES]; /**< the frame handed to the filter */
-            sfd_window_scratch_t scratch;           /**< its tests' and update's work space */
-        } window;
+        /** the window filter's work space for its tests and its frame; the frame's
+         *  observations are built in its u.obs */
+        sfd_window_scratch_t window;
         /** the rest detector of a start at rest: filled and evaluated within one call of
          *  sfd_nav_advance() while the filter is not running (no window work then) */
         sfd_rest_t rest;

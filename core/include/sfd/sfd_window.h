@@ -185,7 +185,12 @@ typedef struct {
 typedef struct {
     sfd_msckf_track_t track; /**< one track's rows (both calls) */
     sfd_msckf_stack_t stack; /**< the frame's folded tracks (sfd_window_frame) */
-    sfd_msckf_work_t work;   /**< the update's matrices (sfd_window_frame) */
+    union {
+        sfd_msckf_work_t work; /**< the update's matrices (sfd_window_frame) */
+        /** where a caller may build the frame's observations for sfd_window_frame(), which
+         *  reads every one of them before it writes work */
+        sfd_window_obs_t obs[SFD_WINDOW_MAX_TRACKS];
+    } u;
     double dx[SFD_MSCKF_DIM];
 } sfd_window_scratch_t;
 
@@ -232,7 +237,8 @@ sfd_status_t sfd_window_propagate(sfd_window_t *w, const double gyro_rad_s[3],
 /**
  * @brief One frame at the filter's current time (propagate to the frame's time first): clone,
  *        observations, the updates of the tracks that are due, marginalization (file comment).
- * @param obs n observations (n <= SFD_WINDOW_MAX_TRACKS; bad ones counted in overflow).
+ * @param obs n observations (n <= SFD_WINDOW_MAX_TRACKS; bad ones counted in overflow); they
+ *        may be in scratch->u.obs (read before the update uses that memory).
  * @param ext the camera's pose in the IMU frame.
  * @param scratch the call's work space (required; sfd_window_scratch_t).
  * @param result required.
