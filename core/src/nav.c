@@ -271,6 +271,21 @@ sfd_status_t sfd_nav_start_at(sfd_nav_t *nav, int64_t utime, const double p_m[3]
     return SFD_OK;
 }
 
+/* 1 when the filter's state and its covariance's diagonal are finite and the variances
+ * non-negative (a state that overflowed must not be published nor used). */
+static int ekf_state_finite(const sfd_ekf_t *e) {
+    for (int k = 0; k < 3; ++k) {
+        if (!isfinite(e->p_IinW_m[k]) || !isfinite(e->v_IinW_m_s[k])) return 0;
+    }
+    for (int k = 0; k < 4; ++k) {
+        if (!isfinite(e->q_ItoW[k])) return 0;
+    }
+    for (int i = 0; i < SFD_EKF_DIM; ++i) {
+        if (!(e->P[i * SFD_EKF_DIM + i] >= 0.0) || !isfinite(e->P[i * SFD_EKF_DIM + i])) return 0;
+    }
+    return 1;
+}
+
 int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us) {
     if (!nav->cfg.enabled) return SFD_REJECT_NONE;
     if (!nav->ready && nav->cfg.init_from_truth) return SFD_REJECT_NONE; /* waits for TRUTH */
@@ -302,8 +317,9 @@ int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us) {
         t = t_end;
     }
     nav->ekf_utime = t_us;
-    if (nav->cfg.window_filter && sfd_window_to_ekf(&nav->win, &nav->ekf) != SFD_OK) {
-        nav->ready = 0;
+    if ((nav->cfg.window_filter && sfd_window_to_ekf(&nav->win, &nav->ekf) != SFD_OK) ||
+        !ekf_state_finite(&nav->ekf)) {
+        nav->ready = 0; /* restart from rest later rather than publish a state that overflowed */
         return SFD_REJECT_CORE;
     }
     return SFD_REJECT_NONE;

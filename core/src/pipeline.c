@@ -147,8 +147,23 @@ static void restart_imu_side(sfd_pipeline_t *p) {
     if (w >= 0) make_due(p, w, SFD_REJECT_IMU_GAP);
 }
 
+/* 1 when every axis of the sample is finite and within the physical bounds (sfd_imu.h). */
+static int imu_values_plausible(const sfd_imu_sample_t *s) {
+    for (int k = 0; k < 3; ++k) {
+        if (!(fabs(s->gyro_rad_s[k]) <= SFD_IMU_MAX_GYRO_RAD_S) ||
+            !(fabs(s->accel_m_s2[k]) <= SFD_IMU_MAX_ACCEL_M_S2)) {
+            return 0; /* NaN fails the comparison too */
+        }
+    }
+    return 1;
+}
+
 int sfd_pipeline_push_imu(sfd_pipeline_t *p, const sfd_imu_sample_t *s) {
     if (p == NULL || s == NULL) return SFD_REJECT_DECODE;
+    if (!imu_values_plausible(s)) {
+        sfd_pipeline_count_reject(p, SFD_REJECT_NONFINITE);
+        return SFD_REJECT_NONFINITE;
+    }
     const sfd_time_verdict_t v = sfd_time_guard_check(&p->imu_time, s->t_us, &p->frame_time);
     const int tr = time_reason(v);
     if (tr != SFD_REJECT_NONE) {

@@ -465,6 +465,42 @@ static void malformed_features_and_missing_frames_are_counted(void **state) {
     assert_string_equal(sfd_reject_reason_str(SFD_REJECT_NUM_REASONS), "unknown");
 }
 
+/* GIVEN a running pipeline WHEN IMU samples carry a finite specific force of 1e160 m/s^2, a rate
+ * beyond SFD_IMU_MAX_GYRO_RAD_S and a NaN THEN each is refused as nonfinite and counted, never
+ * reaches the ring (its time is not taken either), and the filter and its published state stay
+ * finite: the frames go on being judged with the filter's state. (fuzz.sequence found a 1e160
+ * sample that overflowed the covariance into NaN.) */
+static void an_imu_sample_beyond_physical_bounds_is_refused(void **state) {
+    (void)state;
+    start(&g_p);
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 15);
+    int k = 0, judged = 0;
+    assert_int_equal(feed(&g_p, &rng, &k, 1, 40, 0, &judged), 40);
+    assert_true(sfd_pipeline_output(&g_p)->has_state);
+    const int64_t stored = g_p.ring.count;
+    const int64_t newest = sfd_imu_ring_newest(&g_p.ring);
+    sfd_imu_sample_t bad;
+    imu_sample(&rng, k + 1, &bad);
+    bad.accel_m_s2[1] = 1e160;
+    assert_int_equal(sfd_pipeline_push_imu(&g_p, &bad), SFD_REJECT_NONFINITE);
+    imu_sample(&rng, k + 1, &bad);
+    bad.gyro_rad_s[0] = -1.5 * SFD_IMU_MAX_GYRO_RAD_S;
+    assert_int_equal(sfd_pipeline_push_imu(&g_p, &bad), SFD_REJECT_NONFINITE);
+    imu_sample(&rng, k + 1, &bad);
+    bad.accel_m_s2[2] = NAN;
+    assert_int_equal(sfd_pipeline_push_imu(&g_p, &bad), SFD_REJECT_NONFINITE);
+    assert_true(g_p.counters.rejected[SFD_REJECT_NONFINITE] == 3);
+    assert_true(g_p.ring.count == stored && sfd_imu_ring_newest(&g_p.ring) == newest);
+    assert_int_equal(feed(&g_p, &rng, &k, 41, 50, 0, &judged), 10);
+    const sfd_pipeline_output_t *o = sfd_pipeline_output(&g_p);
+    assert_true(o->has_state);
+    for (int j = 0; j < 3; ++j) {
+        assert_true(isfinite(o->p_IinW_m[j]) && fabs(o->p_IinW_m[j]) < 0.1);
+        assert_true(isfinite(o->p_var_m2[j]) && o->p_var_m2[j] >= 0.0);
+    }
+}
+
 /* GIVEN a 1 kHz IMU at rest (the ring's 512 samples span 0.51 s, less than the 1 s rest window)
  * WHEN frames come THEN the filter still starts at rest, from what the full ring holds (it used
  * to wait for ever). */
@@ -621,6 +657,7 @@ int main(void) {
         cmocka_unit_test(a_restarted_publisher_is_followed_after_n_messages),
         cmocka_unit_test(a_known_map_and_start_localize_from_the_first_frame),
         cmocka_unit_test(malformed_features_and_missing_frames_are_counted),
+        cmocka_unit_test(an_imu_sample_beyond_physical_bounds_is_refused),
         cmocka_unit_test(a_fast_imu_still_starts_the_filter_at_rest),
         cmocka_unit_test(parity_calibrates_its_pixel_noise_and_sees_a_drift),
     };

@@ -16,6 +16,13 @@
 extern "C" {
 #endif
 
+/** Largest magnitude per axis of an IMU sample the pipeline accepts (sfd_pipeline_push_imu):
+ *  far beyond any IMU's full scale (MEMS gyros reach about 35 rad/s, high-g accelerometers about
+ *  4000 m/s^2), and far below what the filter's arithmetic overflows at (a finite 1e160 m/s^2
+ *  made its covariance NaN: fuzz.sequence). */
+#define SFD_IMU_MAX_GYRO_RAD_S 1.0e3
+#define SFD_IMU_MAX_ACCEL_M_S2 1.0e5
+
 /** One IMU sample, IMU frame. */
 typedef struct {
     int64_t t_us;         /**< sample time (microseconds) */

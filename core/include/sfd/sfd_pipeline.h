@@ -167,8 +167,10 @@ int sfd_pipeline_set_camera(sfd_pipeline_t *p, const sfd_camera_t *cam,
  *        the time-glitch policy (sfd_time_guard.h, docs/time_glitches.md); the sample that makes
  *        a new time base (a restarted IMU) empties the ring and stops the filter (it restarts
  *        from rest), and a waiting frame becomes due without IMU (imu_gap); counted as restart.
- * @return SFD_REJECT_NONE; SFD_REJECT_ORDER (not after the previous sample, within the horizon:
- *         dropped); SFD_REJECT_TIME_JUMP (farther than the horizon: dropped, never the
+ * @return SFD_REJECT_NONE; SFD_REJECT_NONFINITE (a rate or specific force that is NaN, Inf or
+ *         beyond SFD_IMU_MAX_GYRO_RAD_S / SFD_IMU_MAX_ACCEL_M_S2 on an axis: dropped before its
+ *         time is looked at); SFD_REJECT_ORDER (not after the previous sample, within the
+ *         horizon: dropped); SFD_REJECT_TIME_JUMP (farther than the horizon: dropped, never the
  *         reference); SFD_REJECT_IMU_OVERFLOW (stored, but the ring overwrote a sample a frame
  *         may need). Every reason is counted.
  */

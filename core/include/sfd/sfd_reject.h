@@ -17,7 +17,8 @@ typedef enum {
     SFD_REJECT_NONE = -1,
     SFD_REJECT_DECODE = 0,    /**< the buffer does not decode (short, corrupt, wrong type) */
     SFD_REJECT_COUNT = 1,     /**< num_features outside [0, wire capacity] */
-    SFD_REJECT_NONFINITE = 2, /**< NaN/Inf where a number is required (IMU) */
+    SFD_REJECT_NONFINITE = 2, /**< NaN/Inf where a number is required (IMU), or an IMU axis
+                                   beyond the physical bounds of sfd_imu.h */
     SFD_REJECT_ORDER = 3,     /**< utime not after the channel's previous message */
     SFD_REJECT_CAMERA_ID = 4, /**< camera_id unknown (no CAMERA_INFO for it) */
     SFD_REJECT_DEPTH =
