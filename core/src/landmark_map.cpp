@@ -91,12 +91,14 @@ void remove_entry(sfd_landmark_map_t *map, int32_t e, int32_t s) {
     map->count -= 1;
 }
 
-/// Least recently seen landmark last seen strictly before @p utime (ties: lowest index), or -1.
+/// Least recently seen landmark last seen strictly before @p utime and not kept for the current
+/// frame (sfd_landmark_keep_in_frame; ties: lowest index), or -1.
 int32_t lru_victim(const sfd_landmark_map_t &map, int64_t utime) {
     int32_t victim = -1;
     for (int32_t e = 0; e < kCap; ++e) {
         const sfd_landmark_t &l = map.entries[e];
         if (l.used == 0U || l.last_seen_utime >= utime) continue;
+        if (map.frame_stamp != 0U && l.frame_stamp == map.frame_stamp) continue;
         if (victim < 0 || l.last_seen_utime < map.entries[victim].last_seen_utime) victim = e;
     }
     return victim;
@@ -518,6 +520,23 @@ extern "C" int32_t sfd_landmark_remove(sfd_landmark_map_t *map, int64_t track_id
     if (e < 0) return 0;
     remove_entry(map, e, slot);
     return 1;
+}
+
+extern "C" sfd_status_t sfd_landmark_begin_frame(sfd_landmark_map_t *map) {
+    if (map == nullptr) return SFD_ERR_INVAL;
+    if (map->initialized != 1) return SFD_ERR_STATE;
+    // 0 means "never": after 2^32 - 1 frames the stamp skips it (an entry stamped 2^32 frames
+    // ago would look current for one frame: harmless, it only spares an eviction).
+    map->frame_stamp = (map->frame_stamp == UINT32_MAX) ? 1U : map->frame_stamp + 1U;
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_landmark_keep_in_frame(sfd_landmark_map_t *map, int32_t index) {
+    if (map == nullptr) return SFD_ERR_INVAL;
+    if (map->initialized != 1) return SFD_ERR_STATE;
+    if (!entry_in_range(index) || map->entries[index].used == 0U) return SFD_ERR_INVAL;
+    map->entries[index].frame_stamp = map->frame_stamp;
+    return SFD_OK;
 }
 
 extern "C" int32_t sfd_landmark_evict_older_than(sfd_landmark_map_t *map, int64_t utime) {

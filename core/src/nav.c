@@ -475,6 +475,14 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *stat
     const double f = 0.5 * (nav->ekf_cam.fx_px + nav->ekf_cam.fy_px);
     const double sigma_xn = nav->params.pixel_sigma_px / f;
     const int64_t t = frame->utime;
+    /* The landmarks of this frame's tracks, whatever their verdict, are not evicted to make room
+     * for this frame's new ones: the next frame's matches need them. */
+    (void)sfd_landmark_begin_frame(&nav->map);
+    for (int32_t i = 0; i < frame->num_features; ++i) {
+        const int32_t li =
+            nav->ok[i] ? sfd_landmark_find(&nav->map, frame->features[i].track_id) : -1;
+        if (li >= 0) (void)sfd_landmark_keep_in_frame(&nav->map, li);
+    }
     for (int32_t i = 0; i < frame->num_features; ++i) {
         if (!nav->ok[i]) continue;
         const int64_t id = frame->features[i].track_id;

@@ -431,6 +431,14 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
             continue;
         }
         for (int c = 0; c < 3; ++c) o.jjt_px2[c] = static_cast<float>(jjt[c]);
+        // and still positive definite once stored (float rounding of a near-singular J J^T)
+        const double s0 = static_cast<double>(o.jjt_px2[0]), s1 = static_cast<double>(o.jjt_px2[1]),
+                     s2 = static_cast<double>(o.jjt_px2[2]);
+        if (!(s0 > 0.0 && s2 > 0.0 && s0 * s2 - s1 * s1 > 0.0)) {
+            v.reason = SFD_REASON_BAD_INPUT;
+            out->flags |= SFD_FLAG_BAD_FEATURES;
+            continue;
+        }
         // the grouping's pixels, clamped into float's range (morton_key clamps further)
         o.uv_px[0] = static_cast<float>(std::fmin(std::fmax(f.u_px, -kFloatMax), kFloatMax));
         o.uv_px[1] = static_cast<float>(std::fmin(std::fmax(f.v_px, -kFloatMax), kFloatMax));

@@ -245,6 +245,11 @@ bool store_observation(const double xn[2], const double cov[3], float xn_out[2],
     float x[2], c[3];
     for (int e = 0; e < 2; ++e) x[e] = static_cast<float>(xn[e]);
     for (int e = 0; e < 3; ++e) c[e] = static_cast<float>(cov[e]);
+    // variances below float's normal range (subnormal: fewer digits) are refused too
+    if (!(c[0] >= std::numeric_limits<float>::min()) ||
+        !(c[2] >= std::numeric_limits<float>::min())) {
+        return false;
+    }
     Mat2 W;
     if (!inv2(c, &W)) return false;
     for (int e = 0; e < 2; ++e) xn_out[e] = x[e];

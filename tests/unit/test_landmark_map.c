@@ -845,6 +845,43 @@ static void landmark_full_map_evicts_lru_or_refuses_with_capacity(void **state) 
     assert_canaries_intact();
 }
 
+/* GIVEN a full map whose oldest landmarks (tracks 1000, 1001, seen at 50) belong to the frame
+ * being processed (sfd_landmark_keep_in_frame after sfd_landmark_begin_frame) WHEN the frame's
+ * new tracks need room THEN the least recently seen landmark NOT of this frame is evicted
+ * (1005, seen at 60), never the frame's own, whatever their last_seen_utime; once the frame's
+ * landmarks are all that is left the insert is refused with SFD_ERR_CAPACITY; the next frame
+ * (begin_frame again) no longer protects them. Marking refuses bad indices. */
+static void landmark_full_map_never_evicts_the_current_frames_tracks(void **state) {
+    (void)state;
+    sfd_landmark_map_t *map = guarded_map();
+    for (int32_t i = 0; i < SFD_MAX_LANDMARKS; ++i) {
+        int32_t idx = -1;
+        const int64_t t = (i < 2) ? 50 : (i == 5 ? 60 : 100);
+        assert_status(insert(map, 1000 + i, t, &idx), SFD_OK);
+    }
+    assert_status(sfd_landmark_begin_frame(map), SFD_OK);
+    assert_status(sfd_landmark_keep_in_frame(map, 0), SFD_OK);
+    assert_status(sfd_landmark_keep_in_frame(map, 1), SFD_OK);
+    int32_t idx = -1;
+    assert_status(insert(map, -1, 200, &idx), SFD_OK);
+    assert_int_equal(idx, 5);
+    assert_true(sfd_landmark_find(map, 1000) == 0 && sfd_landmark_find(map, 1001) == 1);
+    /* only the frame's landmarks and ones seen at 200 left: keep all others in the frame too */
+    for (int32_t i = 2; i < SFD_MAX_LANDMARKS; ++i) {
+        assert_status(sfd_landmark_keep_in_frame(map, i), SFD_OK);
+    }
+    assert_status(insert(map, -2, 200, &idx), SFD_ERR_CAPACITY);
+    /* the next frame: the oldest (1000, seen at 50) goes first again */
+    assert_status(sfd_landmark_begin_frame(map), SFD_OK);
+    assert_status(insert(map, -3, 300, &idx), SFD_OK);
+    assert_int_equal(idx, 0);
+    assert_status(sfd_landmark_keep_in_frame(map, -1), SFD_ERR_INVAL);
+    assert_status(sfd_landmark_keep_in_frame(map, SFD_MAX_LANDMARKS), SFD_ERR_INVAL);
+    assert_status(sfd_landmark_keep_in_frame(NULL, 0), SFD_ERR_INVAL);
+    assert_status(sfd_landmark_begin_frame(NULL), SFD_ERR_INVAL);
+    assert_canaries_intact();
+}
+
 /* GIVEN a known point WHEN set THEN the entry holds it bit for bit, marked fixed, replacing a
  * landmark the track had; a full map evicts for it as for a new landmark; a covariance that is
  * not symmetric positive definite, a non-finite point or an uninitialized map is refused with the
@@ -1168,6 +1205,7 @@ int main(void) {
         cmocka_unit_test(landmark_pose_covariance_inflation_keeps_refinement_consistent),
         cmocka_unit_test(landmark_refine_gate_rejects_20px_jump_and_leaves_landmark_unchanged),
         cmocka_unit_test(landmark_full_map_evicts_lru_or_refuses_with_capacity),
+        cmocka_unit_test(landmark_full_map_never_evicts_the_current_frames_tracks),
         cmocka_unit_test(landmark_find_and_remove_round_trip),
         cmocka_unit_test(landmark_set_holds_a_known_point_as_given),
         cmocka_unit_test(landmark_evict_older_than_drops_exactly_the_stale_ones),

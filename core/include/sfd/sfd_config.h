@@ -45,7 +45,8 @@
 
 /** Landmarks the node's map holds (sfd_landmarks.h): one per track of a frame. A match needs
  *  its track in the previous frame and a landmark, and a full map evicts the least recently
- *  seen landmark, so the tracks of one frame (at most SFD_MAX_FEATURES) keep theirs; a track
+ *  seen landmark but never one of the frame being processed (sfd_landmark_keep_in_frame), so
+ *  the tracks of one frame (at most SFD_MAX_FEATURES) keep theirs; a track
  *  that drops out and comes back keeps its landmark while the frames leave room (the default
  *  was 2 * SFD_MAX_FEATURES until 2026-11-26: replays of every sfd-sim log scenario are
  *  byte-identical with either). Cost: 128 bytes per landmark plus 12 bytes of index, i.e.

@@ -50,6 +50,8 @@ typedef struct {
     int32_t rejections;      /**< observations refused by the refinement gate */
     uint8_t used;            /**< 1 when the entry holds a landmark */
     uint8_t fixed;           /**< 1: a known landmark (sfd_landmark_set): never refined */
+    uint32_t frame_stamp;    /**< the map's frame_stamp when its track was last in a frame
+                                  (sfd_landmark_keep_in_frame); 0 never */
 } sfd_landmark_t;
 
 /** The map. Caller-owned (declare it static: it is ~36 KiB at the default capacity);
@@ -61,6 +63,7 @@ typedef struct {
     int32_t num_free;                        /**< entries on the free stack */
     int32_t count;                           /**< landmarks held */
     uint32_t evictions;                      /**< landmarks dropped to make room (LRU) */
+    uint32_t frame_stamp; /**< the current frame's stamp (sfd_landmark_begin_frame), 0 before */
     int32_t initialized;
     /* Private: the last camera pose argument (R_CtoW, p_CinW_m, cov_pose6) that passed
      * validation, bit for bit, with its symmetrized covariance: the landmarks of one frame are
@@ -189,6 +192,24 @@ sfd_status_t sfd_landmark_refine(sfd_landmark_map_t *map, int32_t index, const d
  *         an uninitialized map.
  */
 int32_t sfd_landmark_remove(sfd_landmark_map_t *map, int64_t track_id);
+
+/**
+ * @brief Starts a frame for the eviction rule: a full map that must make room evicts the least
+ *        recently seen landmark, but never one marked with sfd_landmark_keep_in_frame() since
+ *        this call (the landmarks of the tracks of the frame being processed, whatever their
+ *        verdict; the next frame's matches need them). Call it once per frame, then mark.
+ * @return SFD_OK; SFD_ERR_INVAL for null; SFD_ERR_STATE for an uninitialized map.
+ */
+sfd_status_t sfd_landmark_begin_frame(sfd_landmark_map_t *map);
+
+/**
+ * @brief Marks landmark @p index as one of the current frame's (see sfd_landmark_begin_frame):
+ *        a full map does not evict it until the next frame begins. Its last_seen_utime and its
+ *        age are unchanged.
+ * @return SFD_OK; SFD_ERR_INVAL for null or an index out of range or not in use; SFD_ERR_STATE
+ *         for an uninitialized map.
+ */
+sfd_status_t sfd_landmark_keep_in_frame(sfd_landmark_map_t *map, int32_t index);
 
 /**
  * @brief Removes every landmark last seen before @p utime (e.g. tracks lost for longer than a

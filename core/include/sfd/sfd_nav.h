@@ -8,8 +8,10 @@
  *
  * The node calls, per frame: sfd_nav_advance() (propagate to the frame), sfd_nav_build()
  * (matches of the tracks seen in the previous frame that have a landmark), then times
- * sfd_assoc_select() / sfd_assoc_apply() itself (SFD_TIMING stages), then sfd_nav_finish()
- * (landmarks refined or created with the posterior camera pose, the frame kept for the next).
+ * sfd_assoc_select() / sfd_assoc_apply() itself (SFD_TIMING stages) with &nav->work.assoc.scratch
+ * as their work space, then sfd_nav_finish() (landmarks refined or created with the posterior
+ * camera pose, the frame kept for the next; with the window filter it builds the filter's frame
+ * in nav->work, over the matches and the filter copy, which are dead by then).
  *
  * Heap: none; all storage in sfd_nav_t (caller-owned, inside sfd_node_t).
  */
@@ -98,7 +100,7 @@ typedef struct {
      *  association's update (sfd_pipeline_associate -> apply in sfd_pipeline_update); the
      *  window filter's part from its parity tests (sfd_pipeline_detect) and again in
      *  sfd_nav_finish(), after the association's update; the rest detector's within one
-     *  sfd_nav_advance() before the filter starts. Nothing in it survives a call or a frame. */
+     *  sfd_nav_advance() before the filter starts. Nothing in it survives a frame. */
     union {
         struct {
             sfd_match_t matches[SFD_MAX_FEATURES]; /**< filled by sfd_nav_build() */

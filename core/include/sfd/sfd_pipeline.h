@@ -222,8 +222,11 @@ sfd_status_t sfd_pipeline_start_at(sfd_pipeline_t *p, int64_t utime, const doubl
  *        methods match the track against it and the filter is updated with it; it is never
  *        refined. Call it before the frame that observes the track (again after a frame that
  *        judged the track SPURIOUS, which drops its landmark, or after a new calibration,
- *        which empties the map). Works with the single-state EKF (filter.window_filter = 0);
- *        the window filter triangulates its own points and does not read the map.
+ *        which empties the map). The map holds SFD_MAX_LANDMARKS: a known landmark whose track
+ *        was in no recent frame is evicted like any other when the map is full, so give a map
+ *        larger than that shortly before the frames that see it. Works with the single-state EKF
+ * (filter.window_filter = 0); the window filter triangulates its own points and does not read the
+ * map.
  * @return as sfd_landmark_set(); SFD_ERR_STATE when the filter is not enabled.
  */
 sfd_status_t sfd_pipeline_known_landmark(sfd_pipeline_t *p, int64_t track_id, const double p_W_m[3],
