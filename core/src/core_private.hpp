@@ -41,6 +41,22 @@ inline bool all_finite(const double *v, std::size_t n) {
     return true;
 }
 
+/// True when every entry fits a float's range (|v| <= FLT_MAX; NaN does not): the check before
+/// a double is stored as float (a cast of a larger value is undefined behaviour).
+inline bool fits_float(const double *v, std::size_t n) {
+    constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!(std::fabs(v[i]) <= kFloatMax)) return false;
+    }
+    return true;
+}
+
+/// A double clamped into a float's range, then stored as float (NaN stays NaN).
+inline float clamp_to_float(double v) {
+    constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
+    return static_cast<float>(std::fmin(std::fmax(v, -kFloatMax), kFloatMax));
+}
+
 /// True when each of the @p N doubles stored from @p p on (an object representation, e.g. a
 /// struct of doubles; N even) is finite. An exponent field of all ones (Inf, NaN) carries into
 /// bit 63 when one unit of the exponent is added to it; no other exponent does. Two doubles per

@@ -1,9 +1,6 @@
 // SPDX-License-Identifier: MIT
 // The parity-space detector: sliding window of tracked features, deterministic grouping, group
 // tests, isolation inside failing groups, verdicts (sfd/sfd_parity.h, core/docs/parity_space.md).
-#include <cmath>
-#include <limits>
-
 #include "core_private.hpp"
 #include "parity_space.hpp"
 #include "rotation.hpp"
@@ -38,9 +35,6 @@ void hash_insert(int16_t *table, int64_t id, int16_t index) {
     const sfd_track_index_t t = sfd_track_index_i16(table, kSlots, nullptr, 0, 0);
     (void)sfd_track_index_insert(&t, id, index);
 }
-
-// Largest magnitude the ring stores as float (FLT_MAX, as a double).
-constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
 
 // Spread-out ordering key: Morton (Z-order) code of the pixel position in 16-px cells. Walking
 // the Z-curve visits the image region by region, so taking every G-th feature of that walk puts
@@ -424,8 +418,7 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
         // A J J^T beyond float's range (a distortion model near its fold) is bad input.
         const double jjt[3] = {J[0] * J[0] + J[1] * J[1], J[0] * J[2] + J[1] * J[3],
                                J[2] * J[2] + J[3] * J[3]};
-        if (!(std::fabs(jjt[0]) <= kFloatMax && std::fabs(jjt[1]) <= kFloatMax &&
-              std::fabs(jjt[2]) <= kFloatMax)) {
+        if (!fits_float(jjt, 3)) {
             v.reason = SFD_REASON_BAD_INPUT;
             out->flags |= SFD_FLAG_BAD_FEATURES;
             continue;
@@ -440,8 +433,8 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
             continue;
         }
         // the grouping's pixels, clamped into float's range (morton_key clamps further)
-        o.uv_px[0] = static_cast<float>(std::fmin(std::fmax(f.u_px, -kFloatMax), kFloatMax));
-        o.uv_px[1] = static_cast<float>(std::fmin(std::fmax(f.v_px, -kFloatMax), kFloatMax));
+        o.uv_px[0] = clamp_to_float(f.u_px);
+        o.uv_px[1] = clamp_to_float(f.v_px);
         const bool prior = std::isfinite(f.depth_m) && f.depth_m > 0.0 &&
                            std::isfinite(f.depth_var_m2) && f.depth_var_m2 >= 0.0;
         o.depth_m = prior ? f.depth_m : det->params.default_depth_m;

@@ -3,9 +3,6 @@
 // propagation with observability-constrained (default) or first-estimate Jacobians, cloning,
 // track bookkeeping, triangulation over the window, the gated null-space update
 // (msckf_update.cpp) and marginalization of the oldest clone.
-#include <cmath>
-#include <limits>
-
 #include "core_private.hpp"
 
 #include <Eigen/Cholesky>
@@ -230,18 +227,10 @@ bool inv2(const float c[3], Mat2 *out) {
     return inv2(cd, out);
 }
 
-/// Largest magnitude a track stores (FLT_MAX, as a double).
-constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
-
 /// One observation into a track's float storage: false (nothing written) unless every value
 /// is finite and within float's range and the stored covariance is positive definite.
 bool store_observation(const double xn[2], const double cov[3], float xn_out[2], float cov_out[3]) {
-    for (int e = 0; e < 2; ++e) {
-        if (!(std::fabs(xn[e]) <= kFloatMax)) return false;
-    }
-    for (int e = 0; e < 3; ++e) {
-        if (!(std::fabs(cov[e]) <= kFloatMax)) return false;
-    }
+    if (!fits_float(xn, 2) || !fits_float(cov, 3)) return false;
     float x[2], c[3];
     for (int e = 0; e < 2; ++e) x[e] = static_cast<float>(xn[e]);
     for (int e = 0; e < 3; ++e) c[e] = static_cast<float>(cov[e]);
