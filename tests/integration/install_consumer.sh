@@ -64,6 +64,6 @@ for def in SFD_MAX_FEATURES=512 SFD_MAX_WINDOW=4 SFD_IMU_RING_CAPACITY=1024; do
 done
 # the library's own values are accepted when given explicitly
 # shellcheck disable=SC2086
-cc -DSFD_MAX_FEATURES=256 -DSFD_MAX_LANDMARKS=512 -o "$tmp/consumer_same" \
+cc -DSFD_MAX_FEATURES=256 -DSFD_MAX_LANDMARKS=256 -o "$tmp/consumer_same" \
   "$src/examples/consumer/main.c" $flags
 echo "install_consumer: find_package(sfd) and a relocated pkg-config (sfd.pc) consumer built and ran the detector"
