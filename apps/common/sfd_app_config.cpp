@@ -7,6 +7,7 @@
 
 #include <cctype>
 #include <cerrno>
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -676,6 +677,13 @@ class Checker {
         finite(key, v);
         if (!(v >= 0.0)) fail(key, format_double(v), "is not >= 0");
     }
+    // lo <= v <= hi.
+    void closed_interval(const std::string &key, double v, double lo, double hi) {
+        finite(key, v);
+        if (!(v >= lo && v <= hi)) {
+            fail(key, format_double(v), "is not in [" + bound(lo) + ", " + bound(hi) + "]");
+        }
+    }
     // lo < v < hi, or lo < v <= hi with hi_closed.
     void open_interval(const std::string &key, double v, double lo, double hi, bool hi_closed) {
         finite(key, v);
@@ -734,8 +742,9 @@ bool validate(const AppConfig &cfg, std::string *error) {
     c.flag("parity_isolation", p.parity_isolation);
     c.flag("pixel_noise_adapt", p.pixel_noise_adapt);
     c.integer("evidence_frames", p.evidence_frames, 0, SFD_MAX_WINDOW);
-    c.positive("default_depth_m", p.default_depth_m);
-    c.non_negative("default_depth_var_m2", p.default_depth_var_m2);
+    // stored as float by the parity detector (sfd_parity_obs_t)
+    c.closed_interval("default_depth_m", p.default_depth_m, FLT_MIN, FLT_MAX);
+    c.closed_interval("default_depth_var_m2", p.default_depth_var_m2, 0.0, FLT_MAX);
     if (p.max_imu_gap_us <= 0) {
         c.fail("max_imu_gap_us", std::to_string(p.max_imu_gap_us), "is not > 0");
     }

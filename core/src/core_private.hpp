@@ -57,6 +57,15 @@ inline float clamp_to_float(double v) {
     return static_cast<float>(std::fmin(std::fmax(v, -kFloatMax), kFloatMax));
 }
 
+/// True when a depth prior (depth_m, depth_var_m2) is one float storage holds: the depth
+/// positive and normal in float, the variance finite, non-negative and within float's range.
+inline bool depth_prior_fits_float(double depth_m, double depth_var_m2) {
+    constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
+    constexpr double kFloatMin = static_cast<double>(std::numeric_limits<float>::min());
+    return depth_m >= kFloatMin && depth_m <= kFloatMax && depth_var_m2 >= 0.0 &&
+           depth_var_m2 <= kFloatMax;
+}
+
 /// True when each of the @p N doubles stored from @p p on (an object representation, e.g. a
 /// struct of doubles; N even) is finite. An exponent field of all ones (Inf, NaN) carries into
 /// bit 63 when one unit of the exponent is added to it; no other exponent does. Two doubles per

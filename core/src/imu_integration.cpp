@@ -28,15 +28,16 @@ extern "C" sfd_status_t sfd_gyro_integrate_span(const sfd_imu_span_t *span, int6
                                                 int64_t t1_us, const double bias_rad_s[3],
                                                 int64_t max_gap_us, double q_I1toI0[4]) {
     if (span == nullptr || q_I1toI0 == nullptr || max_gap_us < 0) return SFD_ERR_INVAL;
+    const bool packed = span->packed[0] != nullptr;
     for (int p = 0; p < 2; ++p) {
-        if (span->count[p] < 0 || (span->count[p] > 0 && span->piece[p] == nullptr)) {
-            return SFD_ERR_INVAL;
-        }
+        const void *piece = packed ? static_cast<const void *>(span->packed[p])
+                                   : static_cast<const void *>(span->piece[p]);
+        if (span->count[p] < 0 || (span->count[p] > 0 && piece == nullptr)) return SFD_ERR_INVAL;
     }
     const size_t n = static_cast<size_t>(span->count[0]) + static_cast<size_t>(span->count[1]);
     if (n < 2 || n > SFD_MAX_IMU_SAMPLES) return SFD_ERR_INVAL;
-    const auto sample = [span](size_t i) -> const sfd_imu_sample_t & {
-        return *sfd_imu_span_at(span, static_cast<int32_t>(i));
+    const auto sample = [span](size_t i) -> sfd_imu_sample_t {
+        return sfd_imu_span_at(span, static_cast<int32_t>(i));
     };
     if (t1_us <= t0_us) return SFD_ERR_ORDER;
     Vec3 bias = Vec3::Zero();
@@ -52,8 +53,8 @@ extern "C" sfd_status_t sfd_gyro_integrate_span(const sfd_imu_span_t *span, int6
 
     Quat q = Quat::Identity();
     for (size_t i = 0; i + 1 < n; ++i) {
-        const sfd_imu_sample_t &s0 = sample(i);
-        const sfd_imu_sample_t &s1 = sample(i + 1);
+        const sfd_imu_sample_t s0 = sample(i);
+        const sfd_imu_sample_t s1 = sample(i + 1);
         const int64_t ta = (s0.t_us > t0_us) ? s0.t_us : t0_us;
         const int64_t tb = (s1.t_us < t1_us) ? s1.t_us : t1_us;
         if (tb <= ta) continue;  // segment outside [t0, t1]
@@ -78,6 +79,7 @@ extern "C" sfd_status_t sfd_gyro_integrate(const sfd_imu_sample_t *samples, size
                                            int64_t t1_us, const double bias_rad_s[3],
                                            int64_t max_gap_us, double q_I1toI0[4]) {
     if (samples == nullptr || n < 2 || n > SFD_MAX_IMU_SAMPLES) return SFD_ERR_INVAL;
-    const sfd_imu_span_t span = {{samples, nullptr}, {static_cast<int32_t>(n), 0}};
+    const sfd_imu_span_t span = {
+        {samples, nullptr}, {static_cast<int32_t>(n), 0}, {nullptr, nullptr}};
     return sfd_gyro_integrate_span(&span, t0_us, t1_us, bias_rad_s, max_gap_us, q_I1toI0);
 }

@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 #include "sfd/sfd_imu_ring.h"
 
+#include <float.h>
+#include <math.h>
 #include <string.h>
 
 void sfd_imu_ring_init(sfd_imu_ring_t *ring) {
@@ -17,7 +19,7 @@ void sfd_imu_ring_set_needed(sfd_imu_ring_t *ring, int64_t t_us) {
     ring->need_known = 1;
 }
 
-static const sfd_imu_sample_t *at(const sfd_imu_ring_t *ring, int32_t i) {
+static const sfd_imu_packed_t *at(const sfd_imu_ring_t *ring, int32_t i) {
     return &ring->samples[(ring->head + i) % SFD_IMU_RING_CAPACITY];
 }
 
@@ -27,6 +29,16 @@ int64_t sfd_imu_ring_newest(const sfd_imu_ring_t *ring) {
 
 int sfd_imu_ring_push(sfd_imu_ring_t *ring, const sfd_imu_sample_t *sample) {
     if (ring->count > 0 && sample->t_us <= sfd_imu_ring_newest(ring)) return SFD_REJECT_ORDER;
+    sfd_imu_packed_t packed;
+    packed.t_us = sample->t_us;
+    for (int k = 0; k < 3; ++k) {
+        /* |x| <= FLT_MAX is false for NaN too */
+        if (!(fabs(sample->gyro_rad_s[k]) <= FLT_MAX && fabs(sample->accel_m_s2[k]) <= FLT_MAX)) {
+            return SFD_REJECT_NONFINITE;
+        }
+        packed.gyro_rad_s[k] = (float)sample->gyro_rad_s[k];
+        packed.accel_m_s2[k] = (float)sample->accel_m_s2[k];
+    }
     int result = SFD_REJECT_NONE;
     if (ring->count == SFD_IMU_RING_CAPACITY) {
         /* harmless when no frame waits yet, or a newer sample is still at or before the first
@@ -41,7 +53,7 @@ int sfd_imu_ring_push(sfd_imu_ring_t *ring, const sfd_imu_sample_t *sample) {
             result = SFD_REJECT_IMU_OVERFLOW;
         }
     }
-    ring->samples[(ring->head + ring->count) % SFD_IMU_RING_CAPACITY] = *sample;
+    ring->samples[(ring->head + ring->count) % SFD_IMU_RING_CAPACITY] = packed;
     ring->count++;
     return result;
 }
@@ -76,10 +88,12 @@ int sfd_imu_ring_span(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us, 
     if (count > cap) return SFD_REJECT_CAPACITY;
     const int32_t start = (ring->head + first) % SFD_IMU_RING_CAPACITY;
     const int32_t tail = SFD_IMU_RING_CAPACITY - start; /* samples before the array wraps */
-    span->piece[0] = &ring->samples[start];
+    span->piece[0] = NULL;
+    span->piece[1] = NULL;
+    span->packed[0] = &ring->samples[start];
     span->count[0] = count < tail ? count : tail;
     span->count[1] = count - span->count[0];
-    span->piece[1] = span->count[1] > 0 ? &ring->samples[0] : NULL;
+    span->packed[1] = span->count[1] > 0 ? &ring->samples[0] : NULL;
     return SFD_REJECT_NONE;
 }
 
@@ -89,7 +103,7 @@ int sfd_imu_ring_window(const sfd_imu_ring_t *ring, int64_t t0_us, int64_t t1_us
     const int r = sfd_imu_ring_span(ring, t0_us, t1_us, cap, &span);
     if (r != SFD_REJECT_NONE) return r;
     const int32_t count = sfd_imu_span_count(&span);
-    for (int32_t i = 0; i < count; ++i) out[i] = *sfd_imu_span_at(&span, i);
+    for (int32_t i = 0; i < count; ++i) out[i] = sfd_imu_span_at(&span, i);
     *n = count;
     return SFD_REJECT_NONE;
 }

@@ -1,11 +1,13 @@
 /* SPDX-License-Identifier: MIT */
 #include "sfd/sfd_nav.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
 #include "sfd/sfd_chi2.h"
 #include "sfd/sfd_reject.h"
+#include "float_round.h"
 #include "track_index.h"
 
 void sfd_nav_config_default(sfd_nav_config_t *cfg) {
@@ -154,8 +156,8 @@ static int start_window_at_rest(sfd_nav_t *nav, const sfd_imu_span_t *span, int6
     if (sfd_rest_init(&nav->work.rest, &rp) != SFD_OK) return SFD_REJECT_CORE;
     const int32_t first = n - blocks * rp.block_samples;
     for (int32_t i = first; i < n; ++i) {
-        const sfd_imu_sample_t *s = sfd_imu_span_at(span, i);
-        (void)sfd_rest_push(&nav->work.rest, s->t_us, s->gyro_rad_s, s->accel_m_s2);
+        const sfd_imu_sample_t s = sfd_imu_span_at(span, i);
+        (void)sfd_rest_push(&nav->work.rest, s.t_us, s.gyro_rad_s, s.accel_m_s2);
     }
     sfd_rest_result_t rr;
     if (sfd_rest_evaluate(&nav->work.rest, &rr) != SFD_OK || !rr.ready || !rr.at_rest) {
@@ -189,10 +191,10 @@ static int start_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_u
     if (nav->cfg.window_filter) return start_window_at_rest(nav, &span, t_us);
     double f[3] = {0, 0, 0}, w[3] = {0, 0, 0};
     for (int32_t i = 0; i < n; ++i) {
-        const sfd_imu_sample_t *s = sfd_imu_span_at(&span, i);
+        const sfd_imu_sample_t s = sfd_imu_span_at(&span, i);
         for (int k = 0; k < 3; ++k) {
-            f[k] += s->accel_m_s2[k];
-            w[k] += s->gyro_rad_s[k];
+            f[k] += s.accel_m_s2[k];
+            w[k] += s.gyro_rad_s[k];
         }
     }
     for (int k = 0; k < 3; ++k) {
@@ -302,15 +304,15 @@ int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us) {
      * (or t_us). The window starts at the last sample at or before ekf_utime. */
     int64_t t = nav->ekf_utime;
     for (int32_t i = 0; i < n && t < t_us; ++i) {
-        const sfd_imu_sample_t *s = sfd_imu_span_at(&span, i);
-        const int64_t t_next = (i + 1 < n) ? sfd_imu_span_at(&span, i + 1)->t_us : t_us;
+        const sfd_imu_sample_t s = sfd_imu_span_at(&span, i);
+        const int64_t t_next = (i + 1 < n) ? sfd_imu_span_at(&span, i + 1).t_us : t_us;
         const int64_t t_end = (t_next < t_us) ? t_next : t_us;
         if (t_end <= t) continue;
         const double dt = (double)(t_end - t) * 1e-6;
         if (dt > nav->cfg.noise.max_dt_s ||
             (nav->cfg.window_filter
-                 ? sfd_window_propagate(&nav->win, s->gyro_rad_s, s->accel_m_s2, dt)
-                 : sfd_ekf_propagate(&nav->ekf, s->gyro_rad_s, s->accel_m_s2, dt)) != SFD_OK) {
+                 ? sfd_window_propagate(&nav->win, s.gyro_rad_s, s.accel_m_s2, dt)
+                 : sfd_ekf_propagate(&nav->ekf, s.gyro_rad_s, s.accel_m_s2, dt)) != SFD_OK) {
             nav->ready = 0;
             return (dt > nav->cfg.noise.max_dt_s) ? SFD_REJECT_IMU_GAP : SFD_REJECT_CORE;
         }
@@ -345,6 +347,12 @@ static int32_t prev_index_find(const sfd_nav_t *nav, int64_t id) {
     return sfd_track_index_find(&t, id);
 }
 
+/* Feature i's normalized coordinates (stored as float, read as double). */
+static void nav_xn(const sfd_nav_t *nav, int32_t i, double xn[2]) {
+    xn[0] = (double)nav->xn[i][0];
+    xn[1] = (double)nav->xn[i][1];
+}
+
 /* Covariance of normalized coordinates xn from isotropic pixel noise sigma through the camera
  * model: J = d(xn)/d(uv) = (d(uv)/d(xn))^-1, Cov = sigma^2 J J^T (xx, xy, yy). 0 when the
  * distortion Jacobian is singular or not finite. */
@@ -366,15 +374,18 @@ static int pixel_noise_xn(const sfd_camera_t *cam, double sigma_px, const double
 /* The window filter's frame: every feature with a coordinate, flagged when judged SPURIOUS (its
  * track's observations are deleted); the tracks its gate refuses lose their landmark too, so the
  * association methods do not score against it. Then the IMU state is read back. */
-static void window_frame(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *status) {
+static void window_frame(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *frame,
+                         const int8_t *status) {
     int32_t n = 0;
     for (int32_t i = 0; i < frame->num_features && n < SFD_MAX_FEATURES; ++i) {
         if (!nav->ok[i]) continue;
-        sfd_window_obs_t *o = &nav->work.window.u.obs[n++];
+        sfd_window_obs_t *o = &nav->work.window.u.obs[n];
+        /* Cov(xn) computed again where read rather than kept per feature (sfd_nav_build checked
+         * that it exists; the same computation gives the same bits) */
+        nav_xn(nav, i, o->xn);
+        if (!pixel_noise_xn(cam, nav->params.pixel_sigma_px, o->xn, o->cov_xn)) continue;
+        ++n;
         o->track_id = frame->features[i].track_id;
-        o->xn[0] = nav->xn[i][0];
-        o->xn[1] = nav->xn[i][1];
-        memcpy(o->cov_xn, nav->cov_xn[i], sizeof o->cov_xn);
         o->depth_m = frame->features[i].depth_m;
         o->depth_var_m2 = frame->features[i].depth_var_m2;
         if (!(o->depth_var_m2 >= 0.0) || !isfinite(o->depth_var_m2) || !isfinite(o->depth_m)) {
@@ -403,12 +414,18 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
     for (int32_t i = 0; i < frame->num_features; ++i) {
         nav->feature_match[i] = -1;
         const double uv_raw[2] = {frame->features[i].u_px, frame->features[i].v_px};
-        nav->ok[i] = (uint8_t)((parity != NULL && sfd_parity_newest_xn(parity, frame->utime, i,
-                                                                       nav->xn[i]) == SFD_OK) ||
-                               sfd_camera_undistort(cam, uv_raw, nav->xn[i], NULL) == SFD_OK);
-        if (nav->ok[i])
-            nav->ok[i] = (uint8_t)pixel_noise_xn(cam, nav->params.pixel_sigma_px, nav->xn[i],
-                                                 nav->cov_xn[i]);
+        double xn[2], cov_xn[3];
+        /* the parity detector's float-rounded coordinates, or the same rounding here */
+        nav->ok[i] = (uint8_t)((parity != NULL &&
+                                sfd_parity_newest_xn(parity, frame->utime, i, xn) == SFD_OK) ||
+                               (sfd_camera_undistort(cam, uv_raw, xn, NULL) == SFD_OK &&
+                                fabs(xn[0]) <= FLT_MAX && fabs(xn[1]) <= FLT_MAX));
+        if (!nav->ok[i]) continue;
+        nav->xn[i][0] = (float)xn[0];
+        nav->xn[i][1] = (float)xn[1];
+        xn[0] = sfd_float_round_trip(xn[0]); /* as stored (the compiler may not skip it) */
+        xn[1] = sfd_float_round_trip(xn[1]);
+        nav->ok[i] = (uint8_t)pixel_noise_xn(cam, nav->params.pixel_sigma_px, xn, cov_xn);
     }
     if (!nav->cfg.enabled || !nav->ready || !nav->have_prev) return 0;
     for (int32_t i = 0; i < frame->num_features; ++i) {
@@ -421,8 +438,10 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
         sfd_match_t *m = &nav->work.assoc.matches[nav->num_matches];
         m->prev_uv_px[0] = nav->prev_uv[p][0];
         m->prev_uv_px[1] = nav->prev_uv[p][1];
-        const double uv[2] = {cam->fx_px * nav->xn[i][0] + cam->cx_px,
-                              cam->fy_px * nav->xn[i][1] + cam->cy_px}; /* undistorted pixel */
+        double xn[2];
+        nav_xn(nav, i, xn);
+        const double uv[2] = {cam->fx_px * xn[0] + cam->cx_px,
+                              cam->fy_px * xn[1] + cam->cy_px}; /* undistorted pixel */
         if (sfd_landmark_to_obs(&nav->map, li, uv, &m->obs) != SFD_OK) continue;
         /* The pixel noise of both observations through the distortion Jacobian (C = I + dC,
          * sfd_camera_pixel_noise()): the previous one's from its undistorted pixel, recomputed
@@ -432,7 +451,7 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
         const double xn_prev[2] = {(m->prev_uv_px[0] - cam->cx_px) / cam->fx_px,
                                    (m->prev_uv_px[1] - cam->cy_px) / cam->fy_px};
         if (sfd_camera_pixel_noise(cam, xn_prev, m->noise.prev_dC) != SFD_OK ||
-            sfd_camera_pixel_noise(cam, nav->xn[i], m->noise.curr_dC) != SFD_OK) {
+            sfd_camera_pixel_noise(cam, xn, m->noise.curr_dC) != SFD_OK) {
             continue;
         }
         nav->match_feature[nav->num_matches] = i;
@@ -457,13 +476,14 @@ static int project_landmark(const sfd_ekf_camera_t *cam, const double R_CtoW[9],
     return isfinite(uv[0]) && isfinite(uv[1]);
 }
 
-void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *status) {
+void sfd_nav_finish(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *frame,
+                    const int8_t *status) {
     if (!nav->cfg.enabled || !nav->ready) {
         nav->have_prev = 0;
         return;
     }
     if (nav->cfg.window_filter) {
-        window_frame(nav, frame, status);
+        window_frame(nav, cam, frame, status);
         if (!nav->ready) {
             nav->have_prev = 0;
             return;
@@ -502,14 +522,18 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *stat
             }
             if (status[i] != SFD_VERDICT_CONSISTENT) continue;
             sfd_landmark_update_t info;
-            (void)sfd_landmark_refine(&nav->map, li, R_CtoW, p_C, have_cov ? cov6 : NULL,
-                                      nav->xn[i], sigma_xn, nav->cfg.landmark_gate_alpha, t, &info);
+            double xn[2];
+            nav_xn(nav, i, xn);
+            (void)sfd_landmark_refine(&nav->map, li, R_CtoW, p_C, have_cov ? cov6 : NULL, xn,
+                                      sigma_xn, nav->cfg.landmark_gate_alpha, t, &info);
             continue;
         }
         const double d = frame->features[i].depth_m;
         const int known = d > 0.0;
+        double xn[2];
+        nav_xn(nav, i, xn);
         (void)sfd_landmark_init_from_ray(
-            &nav->map, id, R_CtoW, p_C, have_cov ? cov6 : NULL, nav->xn[i],
+            &nav->map, id, R_CtoW, p_C, have_cov ? cov6 : NULL, xn,
             known ? d : nav->params.default_depth_m,
             known ? frame->features[i].depth_var_m2 + 1e-6 : nav->cfg.landmark_depth_var_m2,
             sigma_xn, t, NULL);

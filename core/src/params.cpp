@@ -37,8 +37,8 @@ extern "C" sfd_status_t sfd_params_validate(const sfd_params_t *p) {
     if (p->translation_known != 0 && p->translation_known != 1) return SFD_ERR_INVAL;
     if (p->exact_depth_covariance != 0 && p->exact_depth_covariance != 1) return SFD_ERR_INVAL;
     if (p->parity_isolation != 0 && p->parity_isolation != 1) return SFD_ERR_INVAL;
-    if (!(std::isfinite(p->default_depth_m) && p->default_depth_m > 0.0)) return SFD_ERR_INVAL;
-    if (!(std::isfinite(p->default_depth_var_m2) && p->default_depth_var_m2 >= 0.0)) {
+    // the parity detector stores depth priors as float (sfd_parity_obs_t)
+    if (!sfd::depth_prior_fits_float(p->default_depth_m, p->default_depth_var_m2)) {
         return SFD_ERR_INVAL;
     }
     if (!(p->ransac_confidence > 0.0 && p->ransac_confidence < 1.0)) return SFD_ERR_INVAL;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The parity-space detector: sliding window of tracked features, deterministic grouping, group
 // tests, isolation inside failing groups, verdicts (sfd/sfd_parity.h, core/docs/parity_space.md).
+#include "float_round.h"
 #include "core_private.hpp"
 #include "parity_space.hpp"
 #include "rotation.hpp"
@@ -23,10 +24,9 @@ int ring_index(const sfd_parity_t &det, int back) {
     return (det.head - back + kRing) % kRing;
 }
 
-// Index stored for `id` in table (over the observations of fr), or -1 (track_index.h).
-int hash_find(const int16_t *table, const sfd_parity_frame_t &fr, int64_t id) {
-    const sfd_track_index_t t =
-        sfd_track_index_view_i16(table, kSlots, &fr.obs[0].track_id, sizeof fr.obs[0], fr.num);
+// Index stored for `id` in table (over the n track ids of its frame), or -1 (track_index.h).
+int hash_find(const int16_t *table, const int64_t *ids, int n, int64_t id) {
+    const sfd_track_index_t t = sfd_track_index_view_i16(table, kSlots, ids, sizeof ids[0], n);
     return sfd_track_index_find(&t, id);
 }
 
@@ -39,7 +39,9 @@ void hash_insert(int16_t *table, int64_t id, int16_t index) {
 // Spread-out ordering key: Morton (Z-order) code of the pixel position in 16-px cells. Walking
 // the Z-curve visits the image region by region, so taking every G-th feature of that walk puts
 // features of different regions into one group.
-uint32_t morton_key(const float uv[2]) {
+uint32_t morton_key(double u_px, double v_px) {
+    // the raw pixels clamped into float's range, then rounded to float, as they were stored
+    const float uv[2] = {clamp_to_float(u_px), clamp_to_float(v_px)};
     uint32_t c[2];
     for (int k = 0; k < 2; ++k) {
         double v = static_cast<double>(uv[k]) / 16.0;
@@ -57,10 +59,10 @@ uint32_t morton_key(const float uv[2]) {
 // Heap sort of idx[0..n) by (key, track id): no recursion, O(n log n), deterministic.
 struct SortView {
     const uint32_t *key;
-    const sfd_parity_obs_t *obs;
+    const int64_t *track_id;
     bool less(int16_t a, int16_t b) const {
         if (key[a] != key[b]) return key[a] < key[b];
-        return obs[a].track_id < obs[b].track_id;
+        return track_id[a] < track_id[b];
     }
 };
 
@@ -106,16 +108,18 @@ void load_window_feature(const sfd_parity_t &det, const Window &w, int i, Featur
     for (int t = L - 1; t > 0; --t) index[t - 1] = det.frames[w.fidx[t]].obs[index[t]].prev;
     const sfd_parity_obs_t &o0 = det.frames[w.fidx[0]].obs[index[0]];
     const double s2 = det.params.pixel_sigma_px * det.params.pixel_sigma_px;
-    const double m0[3] = {o0.depth_m * o0.xn[0], o0.depth_m * o0.xn[1], o0.depth_m};
+    const double d0 = static_cast<double>(o0.depth_m);
+    const double m0[3] = {d0 * static_cast<double>(o0.xn[0]), d0 * static_cast<double>(o0.xn[1]),
+                          d0};
     for (int t = 0; t < L; ++t) {
         const sfd_parity_obs_t &o = det.frames[w.fidx[t]].obs[index[t]];
-        fw->y[t][0] = o.xn[0];
-        fw->y[t][1] = o.xn[1];
+        fw->y[t][0] = static_cast<double>(o.xn[0]);
+        fw->y[t][1] = static_cast<double>(o.xn[1]);
         for (int c = 0; c < 3; ++c) fw->cov_y[t][c] = s2 * static_cast<double>(o.jjt_px2[c]);
-        fw->depth[t] = o.depth_m;
-        fw->depth_var[t] = o.depth_var_m2;
-        fw->y_dir[t][0] = o.xn[0];
-        fw->y_dir[t][1] = o.xn[1];
+        fw->depth[t] = static_cast<double>(o.depth_m);
+        fw->depth_var[t] = static_cast<double>(o.depth_var_m2);
+        fw->y_dir[t][0] = static_cast<double>(o.xn[0]);
+        fw->y_dir[t][1] = static_cast<double>(o.xn[1]);
         if (det.params.exact_depth_covariance) {
             double m[3];
             for (int r = 0; r < 3; ++r) {
@@ -370,6 +374,8 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
     const bool have_prev = det->count > 0;
     const int16_t *old_table = det->hash[det->hash_cur];
     int16_t *new_table = det->hash[1 - det->hash_cur];
+    const int64_t *old_ids = det->track_id[det->hash_cur];
+    int64_t *new_ids = det->track_id[1 - det->hash_cur];
     for (int s = 0; s < kSlots; ++s) new_table[s] = -1;
     const sfd_parity_frame_t &pf = det->frames[det->head];
     nf.utime = frame->utime;
@@ -398,7 +404,7 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
         v.fault_kind = SFD_FAULT_NONE;
         v.dof = 0;
         v.statistic = 0.0;
-        o.track_id = f.track_id;
+        new_ids[i] = f.track_id;
         o.prev = -1;
         o.run = 0;
         o.valid = 0;
@@ -406,8 +412,9 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
         o.segment = 0;
         const double uv[2] = {f.u_px, f.v_px};
         double J[4];
-        bool ok = all_finite(uv, 2) && sfd_camera_undistort(&det->camera, uv, o.xn, J) == SFD_OK &&
-                  hash_find(new_table, nf, f.track_id) < 0;
+        double xn[2];
+        bool ok = all_finite(uv, 2) && sfd_camera_undistort(&det->camera, uv, xn, J) == SFD_OK &&
+                  fits_float(xn, 2) && hash_find(new_table, new_ids, nf.num, f.track_id) < 0;
         if (!ok) {
             v.reason = SFD_REASON_BAD_INPUT;
             out->flags |= SFD_FLAG_BAD_FEATURES;
@@ -423,29 +430,33 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
             out->flags |= SFD_FLAG_BAD_FEATURES;
             continue;
         }
+        o.xn[0] = static_cast<float>(xn[0]);
+        o.xn[1] = static_cast<float>(xn[1]);
         for (int c = 0; c < 3; ++c) o.jjt_px2[c] = static_cast<float>(jjt[c]);
-        // and still positive definite once stored (float rounding of a near-singular J J^T)
-        const double s0 = static_cast<double>(o.jjt_px2[0]), s1 = static_cast<double>(o.jjt_px2[1]),
-                     s2 = static_cast<double>(o.jjt_px2[2]);
+        // and still positive definite once stored (float rounding of a near-singular J J^T;
+        // sfd_float_round_trip: the compiler may not skip the rounding)
+        const double s0 = sfd_float_round_trip(jjt[0]), s1 = sfd_float_round_trip(jjt[1]),
+                     s2 = sfd_float_round_trip(jjt[2]);
         if (!(s0 > 0.0 && s2 > 0.0 && s0 * s2 - s1 * s1 > 0.0)) {
             v.reason = SFD_REASON_BAD_INPUT;
             out->flags |= SFD_FLAG_BAD_FEATURES;
             continue;
         }
-        // the grouping's pixels, clamped into float's range (morton_key clamps further)
-        o.uv_px[0] = clamp_to_float(f.u_px);
-        o.uv_px[1] = clamp_to_float(f.v_px);
-        const bool prior = std::isfinite(f.depth_m) && f.depth_m > 0.0 &&
-                           std::isfinite(f.depth_var_m2) && f.depth_var_m2 >= 0.0;
-        o.depth_m = prior ? f.depth_m : det->params.default_depth_m;
-        o.depth_var_m2 = prior ? f.depth_var_m2 : det->params.default_depth_var_m2;
+        o.cell_key = morton_key(f.u_px, f.v_px);
+        // The wire's depth prior where it is one float can hold (a depth normal in float, a
+        // finite variance); otherwise the configured default (sfd_params_validate holds it to
+        // the same range), as for a feature that carries none.
+        const bool prior = depth_prior_fits_float(f.depth_m, f.depth_var_m2);
+        o.depth_m = static_cast<float>(prior ? f.depth_m : det->params.default_depth_m);
+        o.depth_var_m2 =
+            static_cast<float>(prior ? f.depth_var_m2 : det->params.default_depth_var_m2);
         o.prior = prior ? 1 : 0;
         o.valid = 1;
         o.run = 1;
         o.segment = 1;
         hash_insert(new_table, f.track_id, static_cast<int16_t>(i));
         if (have_prev) {
-            const int p = hash_find(old_table, pf, f.track_id);
+            const int p = hash_find(old_table, old_ids, pf.num, f.track_id);
             if (p >= 0 && pf.obs[p].valid) {
                 o.prev = static_cast<int16_t>(p);
                 o.run = static_cast<int16_t>(pf.obs[p].run >= SFD_MAX_WINDOW ? SFD_MAX_WINDOW
@@ -481,15 +492,15 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
         const sfd_parity_frame_t &fr = det.frames[ring_index(det, m - 1 - t)];
         const sfd_parity_obs_t &o = fr.obs[index];
         obs->utime[t] = fr.utime;
-        obs->xn[t][0] = o.xn[0];
-        obs->xn[t][1] = o.xn[1];
+        obs->xn[t][0] = static_cast<double>(o.xn[0]);
+        obs->xn[t][1] = static_cast<double>(o.xn[1]);
         for (int c = 0; c < 3; ++c)
             obs->cov_xn[t][c] = scale_px2 * static_cast<double>(o.jjt_px2[c]);
         index = o.prev;
     }
     const sfd_parity_obs_t &newest = det.frames[det.head].obs[i];
-    obs->depth_m = newest.prior ? newest.depth_m : 0.0;
-    obs->depth_var_m2 = newest.prior ? newest.depth_var_m2 : 0.0;
+    obs->depth_m = newest.prior ? static_cast<double>(newest.depth_m) : 0.0;
+    obs->depth_var_m2 = newest.prior ? static_cast<double>(newest.depth_var_m2) : 0.0;
 }
 
 // Known translation from the window filter (sfd_parity_push_frame_filter; core/docs/
@@ -627,8 +638,8 @@ extern "C" sfd_status_t sfd_parity_newest_xn(const sfd_parity_t *det, int64_t ut
     if (fr.utime != utime || index < 0 || index >= fr.num || !fr.obs[index].valid) {
         return SFD_ERR_INVAL;
     }
-    xn[0] = fr.obs[index].xn[0];
-    xn[1] = fr.obs[index].xn[1];
+    xn[0] = static_cast<double>(fr.obs[index].xn[0]);
+    xn[1] = static_cast<double>(fr.obs[index].xn[1]);
     return SFD_OK;
 }
 
@@ -698,10 +709,10 @@ extern "C" sfd_status_t sfd_parity_push_frame_filter(sfd_parity_t *det, const sf
                 lists.group_stat[i] = 0.0f;
                 if (nf.obs[i].valid && nf.obs[i].run >= L) {
                     lists.testable[lists.n_testable++] = static_cast<int16_t>(i);
-                    key[i] = morton_key(nf.obs[i].uv_px);
+                    key[i] = nf.obs[i].cell_key;
                 }
             }
-            const SortView view{key, nf.obs};
+            const SortView view{key, det->track_id[det->hash_cur]};
             heap_sort(lists.testable, lists.n_testable, view);
             test_groups(det, w, &lists, out);
             const int n = det->params.group_size;

@@ -585,7 +585,7 @@ sfd_status_t sfd_pipeline_update(sfd_pipeline_t *p) {
     for (int i = 0; i < frame->num_features; ++i) {
         p->final_status[i] = p->out.verdict.features[i].status;
     }
-    if (p->cfg.nav.enabled) sfd_nav_finish(&p->nav, frame, p->final_status);
+    if (p->cfg.nav.enabled) sfd_nav_finish(&p->nav, &p->camera, frame, p->final_status);
     fill_state(p);
     p->counters.frames_processed++;
     if (p->out.verdict.num_consistent + p->out.verdict.num_spurious == 0) {

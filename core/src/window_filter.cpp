@@ -3,6 +3,7 @@
 // propagation with observability-constrained (default) or first-estimate Jacobians, cloning,
 // track bookkeeping, triangulation over the window, the gated null-space update
 // (msckf_update.cpp) and marginalization of the oldest clone.
+#include "float_round.h"
 #include "core_private.hpp"
 
 #include <Eigen/Cholesky>
@@ -239,8 +240,11 @@ bool store_observation(const double xn[2], const double cov[3], float xn_out[2],
         !(c[2] >= std::numeric_limits<float>::min())) {
         return false;
     }
+    // positive definite as stored (sfd_float_round_trip: the compiler may not skip the rounding)
+    const double stored[3] = {sfd_float_round_trip(cov[0]), sfd_float_round_trip(cov[1]),
+                              sfd_float_round_trip(cov[2])};
     Mat2 W;
-    if (!inv2(c, &W)) return false;
+    if (!inv2(stored, &W)) return false;
     for (int e = 0; e < 2; ++e) xn_out[e] = x[e];
     for (int e = 0; e < 3; ++e) cov_out[e] = c[e];
     return true;

@@ -186,7 +186,7 @@ both "--group-size: x is not an integer" --group-size x
 both "--false-alarm-rate: false_alarm_rate: nan is not finite" --false-alarm-rate nan
 both "--false-alarm-rate: 0.1x is not a number" --false-alarm-rate 0.1x
 both "--pixel-sigma-px: pixel_sigma_px: -1 is not > 0" --pixel-sigma-px -1
-both "--default-depth-m: default_depth_m: 0 is not > 0" --default-depth-m=0
+both "--default-depth-m: default_depth_m: 0 is not in [1.17549e-38, 3.40282e+38]" --default-depth-m=0
 both "--filter.window-size: filter.window_size: 6 is not in 2..5" --filter.window-size 6
 both "--max-imu-gap-us: 2.5 is not a whole number of microseconds (|value| <= 9e15)" \
   --max-imu-gap-us 2.5

@@ -4,6 +4,7 @@
 
 #include "euroc_calib.h"
 
+#include <math.h>
 #include <string.h>
 
 #include <sfd/sfd_imu_ring.h>
@@ -126,7 +127,8 @@ static void imu_assemble_motion_matches_closed_form(void **state) {
     const double *T = kEurocTimuCam;
     sfd_extrinsics_t ext;
     assert_int_equal(sfd_extrinsics_from_matrix(&ext, T), SFD_OK);
-    const double w[3] = {0.3, -0.5, 0.8}, bias[3] = {0.01, 0.02, -0.03};
+    /* rates whose sums with the bias are exact in float (the ring stores floats) */
+    const double w[3] = {0.3125, -0.5, 0.8125}, bias[3] = {0.0078125, 0.015625, -0.03125};
     sfd_imu_ring_init(&g_ring);
     for (int i = 0; i < 100; ++i) {
         sfd_imu_sample_t s =
@@ -172,14 +174,15 @@ static void imu_ring_span_across_the_wrap_equals_the_copy(void **state) {
     assert_int_equal(sfd_imu_ring_span(&g_ring, t0, t1, SFD_MAX_IMU_SAMPLES, &span),
                      SFD_REJECT_NONE);
     assert_true(span.count[0] > 0 && span.count[1] > 0); /* crosses the end of the array */
-    assert_true(span.piece[1] == &g_ring.samples[0]);
+    assert_true(span.packed[1] == &g_ring.samples[0]);
     int32_t n = 0;
     assert_int_equal(sfd_imu_ring_window(&g_ring, t0, t1, g_scratch, SFD_MAX_IMU_SAMPLES, &n),
                      SFD_REJECT_NONE);
     assert_int_equal(sfd_imu_span_count(&span), n);
     assert_int_equal(n, 52);
     for (int32_t i = 0; i < n; ++i) {
-        assert_memory_equal(sfd_imu_span_at(&span, i), &g_scratch[i], sizeof g_scratch[i]);
+        const sfd_imu_sample_t s = sfd_imu_span_at(&span, i);
+        assert_memory_equal(&s, &g_scratch[i], sizeof g_scratch[i]);
     }
     const double bias[3] = {0.01, -0.02, 0.003};
     double q_span[4], q_copy[4];
@@ -194,10 +197,46 @@ static void imu_ring_span_across_the_wrap_equals_the_copy(void **state) {
     assert_int_equal(span.count[0], 16);
     /* a malformed span is refused, not read */
     span.count[1] = 3;
-    span.piece[1] = NULL;
+    span.packed[1] = NULL;
     assert_status(sfd_gyro_integrate_span(&span, t0, t1, bias, 0, q_span), SFD_ERR_INVAL);
     span.count[1] = -1;
     assert_status(sfd_gyro_integrate_span(&span, t0, t1, bias, 0, q_span), SFD_ERR_INVAL);
+}
+
+/* GIVEN the ring stores float samples WHEN a sample is pushed THEN it reads back as its floats
+ * (a relative 6e-8 of each value); WHEN a value is NaN, infinite or beyond float's range THEN
+ * NONFINITE and nothing is stored. */
+static void imu_ring_stores_floats_and_refuses_what_float_cannot_hold(void **state) {
+    (void)state;
+    SFD_REQ("SFD-LCM-004");
+    sfd_imu_ring_init(&g_ring);
+    sfd_imu_sample_t s = sample(1000, 0.1, -0.2, 0.3);
+    s.accel_m_s2[0] = 1.0 / 3.0;
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE);
+    const double bad[] = {NAN, INFINITY, -INFINITY, 1e39, -1e39};
+    for (size_t b = 0; b < sizeof bad / sizeof bad[0]; ++b) {
+        for (int k = 0; k < 6; ++k) {
+            sfd_imu_sample_t x = sample(2000 + (int64_t)(6 * b + k), 0.0, 0.0, 0.0);
+            if (k < 3) {
+                x.gyro_rad_s[k] = bad[b];
+            } else {
+                x.accel_m_s2[k - 3] = bad[b];
+            }
+            assert_int_equal(sfd_imu_ring_push(&g_ring, &x), SFD_REJECT_NONFINITE);
+        }
+    }
+    assert_int_equal(g_ring.count, 1);
+    sfd_imu_sample_t t = sample(5000, 0.1, -0.2, 0.3);
+    assert_int_equal(sfd_imu_ring_push(&g_ring, &t), SFD_REJECT_NONE);
+    sfd_imu_span_t span;
+    assert_int_equal(sfd_imu_ring_span(&g_ring, 1000, 5000, 8, &span), SFD_REJECT_NONE);
+    assert_int_equal(sfd_imu_span_count(&span), 2);
+    const sfd_imu_sample_t r = sfd_imu_span_at(&span, 0);
+    assert_true(r.t_us == 1000);
+    assert_true(r.gyro_rad_s[1] == (double)(float)-0.2);
+    assert_true(r.accel_m_s2[0] == (double)(float)(1.0 / 3.0));
+    assert_true(fabs(r.accel_m_s2[0] - 1.0 / 3.0) <= 6e-8 / 3.0);
+    assert_true(r.accel_m_s2[0] != 1.0 / 3.0); /* stored as float, not double */
 }
 
 int main(void) {
@@ -207,6 +246,7 @@ int main(void) {
         cmocka_unit_test(imu_ring_window_bounds),
         cmocka_unit_test(imu_assemble_motion_matches_closed_form),
         cmocka_unit_test(imu_ring_span_across_the_wrap_equals_the_copy),
+        cmocka_unit_test(imu_ring_stores_floats_and_refuses_what_float_cannot_hold),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -55,7 +55,10 @@ static void params_out_of_range_rejected(void **state) {
     EXPECT_FIELD(exact_depth_covariance, -1, SFD_ERR_INVAL);
     EXPECT_FIELD(parity_isolation, 2, SFD_ERR_INVAL);
     EXPECT_FIELD(default_depth_m, -1.0, SFD_ERR_INVAL);
+    EXPECT_FIELD(default_depth_m, 1e39, SFD_ERR_INVAL);  /* beyond float: stored as float */
+    EXPECT_FIELD(default_depth_m, 1e-40, SFD_ERR_INVAL); /* subnormal in float */
     EXPECT_FIELD(default_depth_var_m2, -0.5, SFD_ERR_INVAL);
+    EXPECT_FIELD(default_depth_var_m2, 1e39, SFD_ERR_INVAL);
     EXPECT_FIELD(ransac_confidence, 1.0, SFD_ERR_INVAL);
     EXPECT_FIELD(gyro_bias_rad_s[1], NAN, SFD_ERR_INVAL);
     EXPECT_FIELD(max_imu_gap_us, 0, SFD_ERR_INVAL);

@@ -30,16 +30,41 @@ typedef struct {
     double accel_m_s2[3]; /**< specific force (m/s^2) */
 } sfd_imu_sample_t;
 
-/** A time-ordered run of samples held in at most two contiguous pieces (a ring buffer that
- *  wraps: the tail of its array, then its head), read in place without a copy. */
+/** One IMU sample as the ring stores it (32 B instead of 56): the rates and specific forces
+ *  in float, a relative 6e-8 (1e-7 rad/s at 1 rad/s, 6e-7 m/s^2 at 1 g: three orders below the
+ *  noise of one sample of a navigation-grade MEMS IMU at 200 Hz). */
 typedef struct {
-    const sfd_imu_sample_t *piece[2]; /**< piece[1] may be NULL when count[1] is 0 */
-    int32_t count[2];                 /**< samples in each piece, >= 0 */
+    int64_t t_us;
+    float gyro_rad_s[3];
+    float accel_m_s2[3];
+} sfd_imu_packed_t;
+
+/** @brief The sample a packed one holds (every float is exactly a double). */
+static inline sfd_imu_sample_t sfd_imu_unpack(const sfd_imu_packed_t *p) {
+    sfd_imu_sample_t s;
+    s.t_us = p->t_us;
+    for (int k = 0; k < 3; ++k) {
+        s.gyro_rad_s[k] = (double)p->gyro_rad_s[k];
+        s.accel_m_s2[k] = (double)p->accel_m_s2[k];
+    }
+    return s;
+}
+
+/** A time-ordered run of samples held in at most two contiguous pieces (a ring buffer that
+ *  wraps: the tail of its array, then its head), read in place without a copy. The pieces are
+ *  either full samples (piece) or the ring's packed ones (packed, when packed[0] is not NULL). */
+typedef struct {
+    const sfd_imu_sample_t *piece[2];  /**< piece[1] may be NULL when count[1] is 0 */
+    int32_t count[2];                  /**< samples in each piece, >= 0 */
+    const sfd_imu_packed_t *packed[2]; /**< instead of piece when packed[0] is not NULL */
 } sfd_imu_span_t;
 
-/** @brief Sample i (0 <= i < count[0] + count[1]) of a span. */
-static inline const sfd_imu_sample_t *sfd_imu_span_at(const sfd_imu_span_t *span, int32_t i) {
-    return (i < span->count[0]) ? &span->piece[0][i] : &span->piece[1][i - span->count[0]];
+/** @brief Sample i (0 <= i < count[0] + count[1]) of a span, by value. */
+static inline sfd_imu_sample_t sfd_imu_span_at(const sfd_imu_span_t *span, int32_t i) {
+    const int p = (i < span->count[0]) ? 0 : 1;
+    const int32_t k = p ? i - span->count[0] : i;
+    if (span->packed[0] != NULL) return sfd_imu_unpack(&span->packed[p][k]);
+    return span->piece[p][k];
 }
 
 /** @brief Samples in a span. */

@@ -18,9 +18,9 @@
 extern "C" {
 #endif
 
-/** Samples kept: 512 = 2.56 s at 200 Hz (56 B each, 28 KiB). The ring must span the rest
- *  window of the filter's start (filter.init_rest_s, 1 s as shipped) plus one frame interval and
- *  the transport's lead of IMU over features. A faster IMU needs a larger
+/** Samples kept: 512 = 2.56 s at 200 Hz (packed in float, sfd_imu_packed_t: 32 B each, 16 KiB). The
+ * ring must span the rest window of the filter's start (filter.init_rest_s, 1 s as shipped) plus
+ * one frame interval and the transport's lead of IMU over features. A faster IMU needs a larger
  *  -DSFD_IMU_RING_CAPACITY (at 1 kHz, 512 samples are 0.51 s: less than the rest window, so the
  *  filter could not start; 2048 would do). Readers take the samples in place
  *  (sfd_imu_ring_span), so no copy of them is kept. */
@@ -29,7 +29,7 @@ extern "C" {
 #endif
 
 typedef struct {
-    sfd_imu_sample_t samples[SFD_IMU_RING_CAPACITY];
+    sfd_imu_packed_t samples[SFD_IMU_RING_CAPACITY];
     int32_t head;           /* index of the oldest sample */
     int32_t count;          /* samples held */
     int64_t overwritten;    /* samples dropped because the ring was full (oldest first) */
@@ -52,7 +52,8 @@ void sfd_imu_ring_init(sfd_imu_ring_t *ring);
  *        span, which no first frame needs; neither is reported (a first frame that finds its
  *        interval gone is judged UNTESTED and counted as imu_gap).
  * @return SFD_REJECT_NONE; SFD_REJECT_ORDER if t_us is not after the newest sample (not stored);
- *         SFD_REJECT_IMU_OVERFLOW as above.
+ *         SFD_REJECT_NONFINITE for a value that is not finite or beyond float's range (the ring
+ *         stores floats; not stored); SFD_REJECT_IMU_OVERFLOW as above.
  */
 int sfd_imu_ring_push(sfd_imu_ring_t *ring, const sfd_imu_sample_t *sample);
 

@@ -117,10 +117,10 @@ typedef struct {
     } work;
     int32_t match_feature[SFD_MAX_FEATURES]; /**< feature index of each match */
     int32_t feature_match[SFD_MAX_FEATURES]; /**< match index of each feature, -1 for none */
-    double xn[SFD_MAX_FEATURES][2];          /**< normalized undistorted coordinates */
-    uint8_t ok[SFD_MAX_FEATURES];            /**< undistortion succeeded */
-    double cov_xn[SFD_MAX_FEATURES][3]; /**< covariance of xn: pixel noise through the distortion
-                                             Jacobian (xx, xy, yy) */
+    float xn[SFD_MAX_FEATURES][2]; /**< normalized undistorted coordinates, rounded to float as
+                                        the parity detector stores them (the same bits whether
+                                        or not it ran: sfd_parity_newest_xn) */
+    uint8_t ok[SFD_MAX_FEATURES];  /**< undistortion succeeded */
     /* the previous frame (observations kept for the next frame's matches) */
     int32_t prev_n;
     int64_t prev_track[SFD_MAX_FEATURES];
@@ -196,9 +196,12 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
  * creates landmarks for features without one (depth prior or the default), drops landmarks unseen
  * for landmark_max_age_s, and keeps the non-SPURIOUS observations as the next frame's previous
  * ones.
+ * @param cam the camera given to sfd_nav_build() for this frame (the window filter's pixel noise
+ *        through its distortion Jacobian is computed again from it).
  * @param status per feature, SFD_VERDICT_* (the frame's final verdicts).
  */
-void sfd_nav_finish(sfd_nav_t *nav, const sfd_frame_t *frame, const int8_t *status);
+void sfd_nav_finish(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *frame,
+                    const int8_t *status);
 
 #ifdef __cplusplus
 }

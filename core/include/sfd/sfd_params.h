@@ -29,17 +29,18 @@ typedef enum {
 } sfd_method_t;
 
 typedef struct {
-    int method;                  /**< sfd_method_t */
-    double pixel_sigma_px;       /**< std. dev. of a feature's pixel noise per axis (px), > 0 */
-    double false_alarm_rate;     /**< design alpha of the chi-square tests, in (0, 0.5] */
-    int window_frames;           /**< parity window L (frames), 2..SFD_MAX_WINDOW */
-    int group_size;              /**< parity group n (features), 1..SFD_MAX_GROUP */
-    int translation_known;       /**< 1: translation from the filter; 0: unknown (eq. 29-33) */
-    int exact_depth_covariance;  /**< 1: exact noise covariance eq. (22); 0: approximation (28) */
-    int parity_isolation;        /**< 1: isolate spurious features inside failing groups (sfd);
-                                      0: discard every feature of a failing group (paper) */
-    double default_depth_m;      /**< depth prior when a feature carries none (m), > 0 */
-    double default_depth_var_m2; /**< variance of that prior (m^2), >= 0 */
+    int method;                 /**< sfd_method_t */
+    double pixel_sigma_px;      /**< std. dev. of a feature's pixel noise per axis (px), > 0 */
+    double false_alarm_rate;    /**< design alpha of the chi-square tests, in (0, 0.5] */
+    int window_frames;          /**< parity window L (frames), 2..SFD_MAX_WINDOW */
+    int group_size;             /**< parity group n (features), 1..SFD_MAX_GROUP */
+    int translation_known;      /**< 1: translation from the filter; 0: unknown (eq. 29-33) */
+    int exact_depth_covariance; /**< 1: exact noise covariance eq. (22); 0: approximation (28) */
+    int parity_isolation;       /**< 1: isolate spurious features inside failing groups (sfd);
+                                     0: discard every feature of a failing group (paper) */
+    double
+        default_depth_m; /**< depth prior when a feature carries none (m), > 0, normal in float */
+    double default_depth_var_m2; /**< variance of that prior (m^2), >= 0, within float range */
     int max_hypotheses;          /**< RANSAC hypothesis budget per frame, 1..SFD_MAX_HYPOTHESES */
     double ransac_confidence;  /**< probability p of eq. (27) of drawing one clean sample, (0, 1) */
     double gyro_bias_rad_s[3]; /**< gyro bias subtracted before integration (rad/s) */

@@ -202,23 +202,24 @@ typedef struct {
     sfd_feature_result_t features[SFD_MAX_FEATURES];
 } sfd_verdict_t;
 
-/** Window storage of one observation (plain data; fields are private to the detector; 72 B,
- *  the doubles first so that the floats and shorts pack without padding). */
+/** Window storage of one observation (plain data; fields are private to the detector; 40 B;
+ *  the track id is kept for the newest two frames only, beside their hash tables).
+ *  Floats throughout: a relative 6e-8, far below the pixel noise the tests resolve (5e-5 px at
+ *  fx = 900 px); values beyond float's range are bad input, never stored clamped. */
 typedef struct {
-    int64_t track_id;
-    double xn[2]; /* undistorted normalized coordinates */
-    double depth_m;
-    double depth_var_m2;
-    float jjt_px2[3]; /* J J^T with J = d xn / d uv (xx, xy, yy): Cov(xn) per px^2 of pixel
-                         noise variance, i.e. Cov(xn) = pixel_sigma_px^2 jjt_px2 (stored without
-                         the sigma so that float storage cannot underflow at any valid sigma) */
-    float uv_px[2];   /* raw pixels, for the spatial grouping (clamped to float's range) */
-    int16_t prev;     /* index of this track in the previous frame, -1 none */
-    int16_t run;      /* consecutive frames observed, this one included (saturating) */
-    int16_t valid;    /* 1 usable, 0 rejected input */
-    int16_t prior;    /* 1: depth_m, depth_var_m2 are the wire's prior; 0: the configured default */
-    int16_t segment;  /* observations since the track's last alarm, this one included
-                         (saturating at SFD_MAX_WINDOW; the evidence test's window) */
+    float xn[2];   /* undistorted normalized coordinates */
+    float depth_m; /* depth prior (positive, normal in float) */
+    float depth_var_m2;
+    float jjt_px2[3];  /* J J^T with J = d xn / d uv (xx, xy, yy): Cov(xn) per px^2 of pixel
+                          noise variance, i.e. Cov(xn) = pixel_sigma_px^2 jjt_px2 (stored without
+                          the sigma so that float storage cannot underflow at any valid sigma) */
+    uint32_t cell_key; /* the spatial grouping's key: Z-order code of the raw pixel's 16-px cell */
+    int16_t prev;      /* index of this track in the previous frame, -1 none */
+    int16_t run;       /* consecutive frames observed, this one included (saturating) */
+    int16_t segment;   /* observations since the track's last alarm, this one included
+                          (saturating at SFD_MAX_WINDOW; the evidence test's window) */
+    int8_t valid;      /* 1 usable, 0 rejected input */
+    int8_t prior; /* 1: depth_m, depth_var_m2 are the wire's prior; 0: the configured default */
 } sfd_parity_obs_t;
 
 typedef struct {
@@ -248,6 +249,8 @@ typedef struct {
     int32_t count;                        /* frames in the ring, <= L */
     sfd_parity_frame_t frames[SFD_MAX_WINDOW];
     int16_t hash[2][SFD_PARITY_HASH_SLOTS]; /* track id -> index, for the newest two frames */
+    int64_t track_id[2][SFD_MAX_FEATURES];  /* their observations' track ids (side hash_cur: the
+                                               newest frame) */
     int32_t hash_cur;
 } sfd_parity_t;
 
@@ -267,8 +270,9 @@ sfd_status_t sfd_parity_reset(sfd_parity_t *det);
 /**
  * @brief Undistorted normalized coordinates of feature @p index of the newest frame, as
  *        sfd_parity_push_frame() computed them with sfd_camera_undistort() and the detector's
- *        camera (bit-identical to calling it again), so that a caller working on the same frame
- *        with the same camera need not undistort twice.
+ *        camera and stored them: rounded to float (bit-identical to rounding the result of
+ *        calling it again), so that a caller working on the same frame with the same camera
+ *        need not undistort twice.
  * @param utime the frame the caller means: must be the newest frame's time.
  * @return SFD_OK with @p xn filled; SFD_ERR_INVAL for null arguments, an index outside the newest
  *         frame, a different @p utime, an empty window, or a feature the frame rejected at
