@@ -327,48 +327,56 @@ extern "C" sfd_status_t sfd_msckf_update(sfd_msckf_stack_t *s, double *P, double
             w->B[i][r] = v;
         }
     }
+    // S is formed in the stack's own rows, which T no longer needs once read: row r of S needs
+    // T's row piv[r] >= r only, so with the rows taken in order S's row r can replace Tq's row r
+    // (every later row r' reads T's row piv[r'] >= r' > r). q, T's last column, is taken first.
+    double q[kDim], z[kDim], dxn[kDim];
+    for (int r = 0; r < k; ++r) q[r] = s->Tq[piv[r]][n];
+    double(*S)[kDim + 1] = s->Tq;
     for (int r = 0; r < k; ++r) {
         const double *t = s->Tq[piv[r]];
+        double row[kDim];
         for (int c = 0; c <= r; ++c) {
             double v = 0.0;
             for (int l = piv[r]; l < n; ++l) v += t[l] * w->B[l][c];
-            w->S[r][c] = v + (r == c ? 1.0 : 0.0);
-            w->S[c][r] = w->S[r][c];
+            row[c] = v + (r == c ? 1.0 : 0.0);
         }
+        for (int c = 0; c <= r; ++c) S[r][c] = row[c];  // the lower triangle: all cholesky reads
     }
-    if (!la::cholesky(w->S, k, w->S)) return SFD_ERR_NUMERIC;  // S = L L^T, L in place
+    if (!la::cholesky(S, k, S)) return SFD_ERR_NUMERIC;  // S = L L^T, L in place
     // With C = B L^-T (K = C L^-1) and z = L^-1 q: dx = K q = C z and
     // P' = P - K S K^T = P - C C^T. For the optimal gain this equals the Joseph form
     // (I - K T) P (I - K T)^T + K K^T at n^2 k / 2 products instead of about 2.5 n^3 (a fifth of
     // a frame, callgrind). What the Joseph form guards against, a P that loses positive
     // definiteness to rounding, is checked instead: a negative diagonal refuses the update.
-    double q[kDim], z[kDim], dxn[kDim];
-    for (int r = 0; r < k; ++r) q[r] = s->Tq[piv[r]][n];
-    la::forward_solve(w->S, k, q, z);
+    la::forward_solve(S, k, q, z);
     for (int i = 0; i < n; ++i) {
-        la::forward_solve(w->S, k, w->B[i], w->B[i]);  // row i of C, in place
+        la::forward_solve(S, k, w->B[i], w->B[i]);  // row i of C, in place
         double v = 0.0;
         for (int r = 0; r < k; ++r) v += w->B[i][r] * z[r];
         dxn[i] = v;
     }
-    for (int i = 0; i < n; ++i) {  // P' lower triangle into w->S (L is no longer needed)
+    // P' lower triangle into the stack's rows too (L is no longer needed), so that P changes
+    // only once every entry is known to be valid.
+    double(*Pn)[kDim + 1] = s->Tq;
+    for (int i = 0; i < n; ++i) {
         for (int j = 0; j <= i; ++j) {
             double v = 0.0;
             for (int r = 0; r < k; ++r) v += w->B[i][r] * w->B[j][r];
-            w->S[i][j] = P[i * kDim + j] - v;
+            Pn[i][j] = P[i * kDim + j] - v;
         }
     }
     for (int i = 0; i < n; ++i) {
-        if (!all_finite(w->S[i], std::size_t(i) + 1) || !std::isfinite(dxn[i]) ||
-            !(w->S[i][i] >= 0.0)) {
+        if (!all_finite(Pn[i], std::size_t(i) + 1) || !std::isfinite(dxn[i]) ||
+            !(Pn[i][i] >= 0.0)) {
             return SFD_ERR_NUMERIC;
         }
     }
     for (int i = 0; i < n; ++i) {
         dx[i] = dxn[i];
         for (int j = 0; j <= i; ++j) {
-            P[i * kDim + j] = w->S[i][j];
-            P[j * kDim + i] = w->S[i][j];
+            P[i * kDim + j] = Pn[i][j];
+            P[j * kDim + i] = Pn[i][j];
         }
     }
     return SFD_OK;

@@ -67,10 +67,10 @@ typedef struct {
     double Tq[SFD_MSCKF_DIM][SFD_MSCKF_DIM + 1]; /**< row k: Y's upper triangle (k..n-1), b_k */
 } sfd_msckf_stack_t;
 
-/** Scratch of sfd_msckf_update() (caller-owned; no content is kept between calls). */
+/** Scratch of sfd_msckf_update() (caller-owned; no content is kept between calls). S = T P T^T
+ *  + I, its factor L and the new P are formed in the stack's rows, which the update consumes. */
 typedef struct {
     double B[SFD_MSCKF_DIM][SFD_MSCKF_DIM]; /**< P T^T, then C = P T^T L^-T */
-    double S[SFD_MSCKF_DIM][SFD_MSCKF_DIM]; /**< T P T^T + I, then its factor L, then P' */
 } sfd_msckf_work_t;
 
 /**
