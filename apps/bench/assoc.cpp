@@ -123,7 +123,7 @@ bool run_method(const Method &m, const sim_pair_t &pr, uint64_t seed, Stats *st)
     std::vector<cv::Point2f> a(size_t(pr.n)), b(size_t(pr.n));
     for (int i = 0; i < pr.n; ++i) {
         a[size_t(i)] = cv::Point2f(float(pr.m[i].prev_uv_px[0]), float(pr.m[i].prev_uv_px[1]));
-        b[size_t(i)] = cv::Point2f(float(pr.m[i].obs.uv_px[0]), float(pr.m[i].obs.uv_px[1]));
+        b[size_t(i)] = cv::Point2f(float(pr.m[i].uv_px[0]), float(pr.m[i].uv_px[1]));
     }
     cv::Mat mask;
     cv::theRNG().state = seed;  // OpenCV's RANSAC draws from its global RNG

@@ -121,6 +121,10 @@ constexpr double kRoomX = 7.0, kRoomY = 6.0, kRoomZ = 3.5;
 constexpr int kWallLandmarks = 1000, kFloorLandmarks = 300;
 constexpr int kLandmarks = kWallLandmarks + kFloorLandmarks;
 constexpr double kLandmarkSigmaM = 0.005;
+// every landmark's covariance (sigma^2 I): the matches refer to it
+constexpr double kLandmarkCov_m2[9] = {kLandmarkSigmaM * kLandmarkSigmaM, 0.0, 0.0, 0.0,
+                                       kLandmarkSigmaM *kLandmarkSigmaM,  0.0, 0.0, 0.0,
+                                       kLandmarkSigmaM *kLandmarkSigmaM};
 constexpr int kMaxMatches = 200;
 constexpr double kMismatchMinPx = 20.0;
 
@@ -426,12 +430,10 @@ bool make_run(const Sigmas &sg, uint64_t base, int run, int frames, RunData *rd)
                 sfd_match_t mt{};
                 mt.prev_uv_px[0] = prev_obs[2 * i];
                 mt.prev_uv_px[1] = prev_obs[2 * i + 1];
-                mt.obs.uv_px[0] = uv_obs[2 * i];
-                mt.obs.uv_px[1] = uv_obs[2 * i + 1];
-                for (size_t k = 0; k < 3; ++k) {
-                    mt.obs.landmark_W_m[k] = Lmap[3 * i + k];
-                    mt.obs.landmark_cov_m2[4 * k] = kLandmarkSigmaM * kLandmarkSigmaM;
-                }
+                mt.uv_px[0] = uv_obs[2 * i];
+                mt.uv_px[1] = uv_obs[2 * i + 1];
+                mt.landmark_W_m = &rd->lmap[3 * i];  // rd->lmap is set once, above
+                mt.landmark_cov_m2 = kLandmarkCov_m2;
                 rd->m.push_back(mt);
                 rd->mismatched.push_back(0U);
                 rd->flow_sum_px += std::hypot(uv_true[2 * i] - prev_true[2 * i],
@@ -464,8 +466,8 @@ bool make_run(const Sigmas &sg, uint64_t base, int run, int frames, RunData *rd)
                     const double dv = uv_obs[2 * io + 1] - uv_true[2 * i + 1];
                     if (du * du + dv * dv >= kMismatchMinPx * kMismatchMinPx) {
                         sfd_match_t &mt = rd->m[first + static_cast<size_t>(j)];
-                        mt.obs.uv_px[0] = uv_obs[2 * io];
-                        mt.obs.uv_px[1] = uv_obs[2 * io + 1];
+                        mt.uv_px[0] = uv_obs[2 * io];
+                        mt.uv_px[1] = uv_obs[2 * io + 1];
                         rd->mismatched[first + static_cast<size_t>(j)] = 1U;
                         break;
                     }
@@ -481,9 +483,8 @@ bool make_run(const Sigmas &sg, uint64_t base, int run, int frames, RunData *rd)
             for (size_t j = first; j < rd->m.size(); ++j) {
                 const size_t i = static_cast<size_t>(idx[j - first]);
                 const sfd_match_t &mt = rd->m[j];
-                rd->feat.push_back(FrameFeature{static_cast<int32_t>(i),
-                                                {mt.obs.uv_px[0], mt.obs.uv_px[1]},
-                                                rd->mismatched[j]});
+                rd->feat.push_back(FrameFeature{
+                    static_cast<int32_t>(i), {mt.uv_px[0], mt.uv_px[1]}, rd->mismatched[j]});
                 in_frame[i] = 1U;
             }
         }

@@ -44,14 +44,13 @@ double distance_px2(Score score, const sfd_ekf_camera_t &cam, const Model &model
                     const sfd_match_t &mt, const double *S_px2) {
     const double inf = std::numeric_limits<double>::infinity();
     if (score == Score::kSampson) {
-        return sampson_px2(model.F, mt.prev_uv_px, mt.obs.uv_px, mt.noise.prev_dC,
-                           mt.noise.curr_dC);
+        return sampson_px2(model.F, mt.prev_uv_px, mt.uv_px, mt.noise.prev_dC, mt.noise.curr_dC);
     }
     if (score == Score::kTransfer) {
         const Vec3 x = model.H_inf * Vec3(mt.prev_uv_px[0], mt.prev_uv_px[1], 1.0);
         if (!(std::fabs(x.z()) > 1e-12)) return inf;
-        const double du = x.x() / x.z() - mt.obs.uv_px[0];
-        const double dv = x.y() / x.z() - mt.obs.uv_px[1];
+        const double du = x.x() / x.z() - mt.uv_px[0];
+        const double dv = x.y() / x.z() - mt.uv_px[1];
         const float *p = mt.noise.prev_dC;
         const float *c = mt.noise.curr_dC;
         const double d = quad_inv_excess(du, dv, 0.5 * (static_cast<double>(p[0]) + c[0]),
@@ -60,13 +59,12 @@ double distance_px2(Score score, const sfd_ekf_camera_t &cam, const Model &model
         return std::isfinite(d) ? d : inf;
     }
     Vec2 uv;
-    if (!project(cam, model.cur,
-                 Vec3(mt.obs.landmark_W_m[0], mt.obs.landmark_W_m[1], mt.obs.landmark_W_m[2]),
+    if (!project(cam, model.cur, Vec3(mt.landmark_W_m[0], mt.landmark_W_m[1], mt.landmark_W_m[2]),
                  &uv)) {
         return inf;
     }
-    const double du = uv(0) - mt.obs.uv_px[0];
-    const double dv = uv(1) - mt.obs.uv_px[1];
+    const double du = uv(0) - mt.uv_px[0];
+    const double dv = uv(1) - mt.uv_px[1];
     double q = 0.0;
     if (!la::inv_quadratic_2x2(S_px2[0], S_px2[1], S_px2[1], S_px2[2], du, dv, &q)) return inf;
     return std::isfinite(q) ? q : inf;
@@ -205,10 +203,18 @@ namespace {
 /// Above this the depth is not finite (overflow of the camera transform).
 constexpr double kInfDepth_m = std::numeric_limits<double>::max();
 
-/// A match is 16 doubles (checked finite in one pass) followed by its pixel noise.
-constexpr std::size_t kMatchDoubles = 16;
-static_assert(offsetof(sfd_match_t, noise) == kMatchDoubles * sizeof(double),
-              "sfd_match_t must start with exactly its 16 doubles");
+/// A match starts with its 4 pixel coordinates (checked finite in one pass); its landmark is
+/// referred to (3 + 9 values, checked where they are).
+constexpr std::size_t kMatchDoubles = 4;
+static_assert(offsetof(sfd_match_t, landmark_W_m) == kMatchDoubles * sizeof(double),
+              "sfd_match_t must start with exactly its 4 pixel coordinates");
+
+/// Every input of a match present and finite: pixels, landmark, its covariance, pixel noise.
+bool match_usable(const sfd_match_t &mt) {
+    return all_finite_repr<kMatchDoubles>(&mt) && mt.landmark_W_m != nullptr &&
+           mt.landmark_cov_m2 != nullptr && all_finite(mt.landmark_W_m, 3) &&
+           all_finite(mt.landmark_cov_m2, 9) && pixel_noise_valid(mt.noise);
+}
 
 // Binds the caller's work space to the association for one call of sfd_assoc_select() or
 // sfd_assoc_apply() (sfd_assoc_t::work), and unbinds it on every return.
@@ -299,12 +305,12 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, sfd_assoc_work_t *w
         const sfd_match_t &mt = matches[i];
         // All 16 inputs finite and the landmark in front of the prior camera. (A landmark whose
         // other camera coordinates overflow fails later, in linearize(), and is never an update.)
-        if (!all_finite_repr<kMatchDoubles>(&mt) || !pixel_noise_valid(mt.noise)) continue;
-        const double depth_m = lz.depth_m(mt.obs.landmark_W_m);
+        if (!match_usable(mt)) continue;
+        const double depth_m = lz.depth_m(mt.landmark_W_m);
         if (!(depth_m > 1e-6 && depth_m < kInfDepth_m)) continue;
         if (need_spread) {
             Linearized lin;
-            if (!lz.linearize(mt.obs, &lin)) continue;
+            if (!lz.linearize(mt.uv_px, mt.landmark_W_m, mt.landmark_cov_m2, &lin)) continue;
             add_pixel_noise(&lin, sigma2, mt);  // S = sigma^2 C_curr + landmark spread
             double *S = a.work->ransac1.S_px2[i];
             S[0] = lin.R(0, 0);
@@ -316,15 +322,15 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, sfd_assoc_work_t *w
             sfd_assoc_ransacf_work_t &w = a.work->ransacf;
             w.x_prev[nv][0] = mt.prev_uv_px[0];
             w.x_prev[nv][1] = mt.prev_uv_px[1];
-            w.x_curr[nv][0] = mt.obs.uv_px[0];
-            w.x_curr[nv][1] = mt.obs.uv_px[1];
+            w.x_curr[nv][0] = mt.uv_px[0];
+            w.x_curr[nv][1] = mt.uv_px[1];
             w.noise[nv] = mt.noise;
         } else if (pack_oprf) {  // OPRF's scoring inputs
             sfd_assoc_oprf_work_t &w = a.work->oprf;
             w.nx_prev_u[nv] = static_cast<float>((mt.prev_uv_px[0] - cam->cx_px) * inv_fx);
             w.nx_prev_v[nv] = static_cast<float>((mt.prev_uv_px[1] - cam->cy_px) * inv_fy);
-            w.nx_curr_u[nv] = static_cast<float>((mt.obs.uv_px[0] - cam->cx_px) * inv_fx);
-            w.nx_curr_v[nv] = static_cast<float>((mt.obs.uv_px[1] - cam->cy_px) * inv_fy);
+            w.nx_curr_u[nv] = static_cast<float>((mt.uv_px[0] - cam->cx_px) * inv_fx);
+            w.nx_curr_v[nv] = static_cast<float>((mt.uv_px[1] - cam->cy_px) * inv_fy);
             w.dc_prev_xx[nv] = mt.noise.prev_dC[0];
             w.dc_prev_xy[nv] = mt.noise.prev_dC[1];
             w.dc_prev_yy[nv] = mt.noise.prev_dC[2];
@@ -406,7 +412,8 @@ extern "C" sfd_status_t sfd_assoc_apply(sfd_assoc_t *assoc, sfd_assoc_work_t *wo
         if (a.valid[i] == 0U || a.best[i] == 0U) continue;
         Linearized lin;
         double d2 = 0.0;
-        if (!lz.linearize(matches[i].obs, &lin)) {
+        const sfd_match_t &mi = matches[i];
+        if (!lz.linearize(mi.uv_px, mi.landmark_W_m, mi.landmark_cov_m2, &lin)) {
             ++skipped;
             continue;
         }

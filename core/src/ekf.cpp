@@ -143,9 +143,11 @@ bool Linearizer::camera_point(const double L_W[3], double c[3]) const {
     return c[2] > 1e-6 && std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
 }
 
-bool Linearizer::linearize(const sfd_ekf_obs_t &obs, Linearized *out) const {
+bool Linearizer::linearize(const double uv_px[2], const double *L_W, const double *C_L,
+                           Linearized *out) const {
+    if (L_W == nullptr || C_L == nullptr) return false;
     // y = R^T (L - p) (landmark in the IMU frame); c = R_CtoI^T (y - p_CinI).
-    const double *L = obs.landmark_W_m;
+    const double *L = L_W;
     const double d0 = L[0] - pI[0], d1 = L[1] - pI[1], d2 = L[2] - pI[2];
     const double y0 = RWI[0] * d0 + RWI[1] * d1 + RWI[2] * d2;
     const double y1 = RWI[3] * d0 + RWI[4] * d1 + RWI[5] * d2;
@@ -183,7 +185,7 @@ bool Linearizer::linearize(const sfd_ekf_obs_t &obs, Linearized *out) const {
         out->H(r, 5) = Br[0] * y1 - Br[1] * y0;
     }
     // R = sigma^2 I + JL C_L JL^T (C_L symmetrized).
-    const double *C = obs.landmark_cov_m2;
+    const double *C = C_L;
     double JC[6];
     for (int r = 0; r < 2; ++r) {
         for (int k = 0; k < 3; ++k) {
@@ -196,8 +198,8 @@ bool Linearizer::linearize(const sfd_ekf_obs_t &obs, Linearized *out) const {
     const double r01 = JC[0] * JL[3] + JC[1] * JL[4] + JC[2] * JL[5];
     const double r11 = JC[3] * JL[3] + JC[4] * JL[4] + JC[5] * JL[5] + sigma2;
     out->R << r00, r01, r01, r11;
-    out->nu(0) = obs.uv_px[0] - (fx * c0 * iz + cx);
-    out->nu(1) = obs.uv_px[1] - (fy * c1 * iz + cy);
+    out->nu(0) = uv_px[0] - (fx * c0 * iz + cx);
+    out->nu(1) = uv_px[1] - (fy * c1 * iz + cy);
     out->p_LinC << c0, c1, c2;
     return std::isfinite(out->nu(0)) && std::isfinite(out->nu(1)) && std::isfinite(r00) &&
            std::isfinite(r01) && std::isfinite(r11) && all_finite(out->H.data(), 12);
@@ -580,9 +582,10 @@ sfd_status_t update_camera(sfd_ekf_t *ekf, const sfd_ekf_camera_t &cam, const Vi
     for (int32_t i = 0; i < n; ++i) {
         if (use != nullptr && use[i] == 0U) continue;
         Linearized lin;
-        const sfd_ekf_obs_t &o = view[i];
-        if (!all_finite(o.uv_px, 2) || !all_finite(o.landmark_W_m, 3) ||
-            !all_finite(o.landmark_cov_m2, 9) || !lz.linearize(o, &lin) || !pi.add(lin)) {
+        const ObsParts o = view[i];
+        if (o.landmark_W_m == nullptr || o.landmark_cov_m2 == nullptr || !all_finite(o.uv_px, 2) ||
+            !all_finite(o.landmark_W_m, 3) || !all_finite(o.landmark_cov_m2, 9) ||
+            !lz.linearize(o.uv_px, o.landmark_W_m, o.landmark_cov_m2, &lin) || !pi.add(lin)) {
             out->skipped += 1;
         }
     }

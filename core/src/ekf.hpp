@@ -58,7 +58,13 @@ struct Linearizer {
         return RWC[6] * (L_W[0] - pC[0]) + RWC[7] * (L_W[1] - pC[1]) + RWC[8] * (L_W[2] - pC[2]);
     }
     /// Full linearization of @p obs; false as camera_point() or when a value is not finite.
-    bool linearize(const sfd_ekf_obs_t &obs, Linearized *out) const;
+    bool linearize(const sfd_ekf_obs_t &obs, Linearized *out) const {
+        return linearize(obs.uv_px, obs.landmark_W_m, obs.landmark_cov_m2, out);
+    }
+    /// The same for an observation given by parts: the undistorted pixel, the landmark (world)
+    /// and its covariance (row-major 3x3); false also when a landmark pointer is null.
+    bool linearize(const double uv_px[2], const double *L_W, const double *C_L,
+                   Linearized *out) const;
 };
 
 /// Linearizes @p obs at the filter's prior; false when the landmark is not in front of the
@@ -95,16 +101,28 @@ struct PoseInformation {
 /// (SFD_OK) when no observation was added. @p nis may be NULL.
 sfd_status_t apply_pose_information(sfd_ekf_t *ekf, const PoseInformation &info, double *nis);
 
+/// One observation by its parts: undistorted pixel (2), landmark (3), its covariance (9).
+struct ObsParts {
+    const double *uv_px;
+    const double *landmark_W_m;
+    const double *landmark_cov_m2;
+};
+
 /// Observations in a plain array.
 struct ObsArray {
     const sfd_ekf_obs_t *p;
-    const sfd_ekf_obs_t &operator[](int32_t i) const { return p[i]; }
+    ObsParts operator[](int32_t i) const {
+        return ObsParts{p[i].uv_px, p[i].landmark_W_m, p[i].landmark_cov_m2};
+    }
 };
 
-/// The observations inside an array of matches (sfd_match_t::obs).
+/// The observations of an array of matches (their current pixels and the landmarks they refer
+/// to).
 struct MatchObs {
     const sfd_match_t *p;
-    const sfd_ekf_obs_t &operator[](int32_t i) const { return p[i].obs; }
+    ObsParts operator[](int32_t i) const {
+        return ObsParts{p[i].uv_px, p[i].landmark_W_m, p[i].landmark_cov_m2};
+    }
 };
 
 /// sfd_ekf_update_camera() over a view (static dispatch: the stack proof rejects indirect

@@ -442,7 +442,13 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
         nav_xn(nav, i, xn);
         const double uv[2] = {cam->fx_px * xn[0] + cam->cx_px,
                               cam->fy_px * xn[1] + cam->cy_px}; /* undistorted pixel */
-        if (sfd_landmark_to_obs(&nav->map, li, uv, &m->obs) != SFD_OK) continue;
+        /* the match refers to the map's entry: the map is not changed before the association's
+         * update (sfd_nav_finish refines, creates and evicts landmarks after it) */
+        const sfd_landmark_t *lm = &nav->map.entries[li];
+        m->uv_px[0] = uv[0];
+        m->uv_px[1] = uv[1];
+        m->landmark_W_m = lm->p_W_m;
+        m->landmark_cov_m2 = lm->cov_m2;
         /* The pixel noise of both observations through the distortion Jacobian (C = I + dC,
          * sfd_camera_pixel_noise()): the previous one's from its undistorted pixel, recomputed
          * here instead of kept per feature (the camera is the same: a new calibration drops the
@@ -454,8 +460,8 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
             sfd_camera_pixel_noise(cam, xn, m->noise.curr_dC) != SFD_OK) {
             continue;
         }
-        nav->match_feature[nav->num_matches] = i;
-        nav->feature_match[i] = nav->num_matches;
+        nav->match_feature[nav->num_matches] = (int16_t)i;
+        nav->feature_match[i] = (int16_t)nav->num_matches;
         nav->num_matches++;
     }
     return nav->num_matches;
@@ -546,7 +552,7 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *
     for (int32_t i = 0; i < frame->num_features; ++i) {
         if (!nav->ok[i]) continue;
         const int64_t id = frame->features[i].track_id;
-        double *uv = nav->prev_uv[nav->prev_n];
+        double uv[2];
         uv[0] = nav->ekf_cam.fx_px * nav->xn[i][0] + nav->ekf_cam.cx_px; /* undistorted */
         uv[1] = nav->ekf_cam.fy_px * nav->xn[i][1] + nav->ekf_cam.cy_px;
         if (status[i] == SFD_VERDICT_SPURIOUS) {
@@ -558,6 +564,9 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *
                 continue;
             }
         }
+        if (!(fabs(uv[0]) <= FLT_MAX && fabs(uv[1]) <= FLT_MAX)) continue; /* kept as float */
+        nav->prev_uv[nav->prev_n][0] = (float)uv[0];
+        nav->prev_uv[nav->prev_n][1] = (float)uv[1];
         nav->prev_track[nav->prev_n] = id;
         nav->prev_n++;
     }

@@ -176,7 +176,7 @@ int32_t gate_innovations(sfd_assoc_t *a, const sfd_ekf_t &ekf, const sfd_ekf_cam
         if (set[i] == 0U) continue;
         Linearized lin;
         double d2 = std::numeric_limits<double>::infinity();
-        const bool ok = lz.linearize(m[i].obs, &lin);
+        const bool ok = lz.linearize(m[i].uv_px, m[i].landmark_W_m, m[i].landmark_cov_m2, &lin);
         if (ok) add_pixel_noise(&lin, cam.pixel_sigma_px * cam.pixel_sigma_px, m[i]);
         if (!ok || !passes_gate(*a, lin, Lss, &d2)) {
             set[i] = 0U;

@@ -15,7 +15,8 @@ bool draw_hypothesis(sfd_assoc_t *a, const SelectInputs &in, const Mat6 &Pss, Ma
     const int32_t pick =
         a->valid_idx[sfd_prng_uniform_index(&a->rng, static_cast<uint32_t>(in.nv))];
     Linearized lin;
-    return in.lz.linearize(in.matches[pick].obs, &lin) &&
+    const sfd_match_t &mp = in.matches[pick];
+    return in.lz.linearize(mp.uv_px, mp.landmark_W_m, mp.landmark_cov_m2, &lin) &&
            single_update_pose(in.ekf, in.R_prior, Pss, lin, R_h, p_h);
 }
 

@@ -288,8 +288,9 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
         // The depth prior is a measurement of the point; the rays' point is not, at low parallax
         // (its depth is then set by the pixel noise, and Gauss-Newton from there may stop far
         // from the optimum, which biases the linearization): start from the prior.
-        p = pose[depth_k].p_CinW + pose[depth_k].R_WtoC.transpose() *
-                                       (t.depth_m * Vec3(t.xn[depth_k][0], t.xn[depth_k][1], 1.0));
+        p = pose[depth_k].p_CinW +
+            pose[depth_k].R_WtoC.transpose() *
+                (static_cast<double>(t.depth_m) * Vec3(t.xn[depth_k][0], t.xn[depth_k][1], 1.0));
     } else {
         // The rays' least-squares point: A p = b with A = sum (I - u u^T) over the unit rays u.
         Mat3 A = Mat3::Zero();
@@ -308,7 +309,7 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
         p = A.ldlt().solve(b);
     }
     if (!all_finite(p.data(), 3)) return false;
-    const double var_d = t.depth_var_m2 + w.prm.depth_var_floor_m2;
+    const double var_d = static_cast<double>(t.depth_var_m2) + w.prm.depth_var_floor_m2;
     for (int it = 0; it < w.prm.gauss_newton_iterations; ++it) {
         Mat3 H = Mat3::Zero();
         Vec3 g = Vec3::Zero();
@@ -327,7 +328,7 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
             const Vec3 pc = pose[depth_k].R_WtoC * (p - pose[depth_k].p_CinW);
             const Vec3 J = pose[depth_k].R_WtoC.row(2).transpose();
             H += J * J.transpose() / var_d;
-            g += J * (t.depth_m - pc.z()) / var_d;
+            g += J * (static_cast<double>(t.depth_m) - pc.z()) / var_d;
         }
         Vec3 dp;
         if (!spd_solve3(H, g, &dp)) return false;
@@ -414,7 +415,7 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
         }
         fej[k] = cam_pose(R_fe[k], p_fe[k], ext);
     }
-    const bool depth_row = w->prm.use_depth_prior && t.depth_m > 0.0 && std::isfinite(t.depth_m);
+    const bool depth_row = w->prm.use_depth_prior && t.depth_m > 0.0F && std::isfinite(t.depth_m);
     Vec3 pf;
     if (!triangulate(*w, t, cur, depth_row, 0, &pf)) return TrackOutcome::kNoGeometry;
 
@@ -484,8 +485,8 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
             tr.Hx[r][col + 3 + j] = dth[0](2, j);
             tr.Hf[r][j] = fej[0].R_WtoC(2, j);
         }
-        tr.r[r] = t.depth_m - pc.z();
-        tr.R[r][r] = t.depth_var_m2 + w->prm.depth_var_floor_m2;
+        tr.r[r] = static_cast<double>(t.depth_m) - pc.z();
+        tr.R[r][r] = static_cast<double>(t.depth_var_m2) + w->prm.depth_var_floor_m2;
     }
     // The gate (3) from the unprojected track, as sfd_window_test_track computes it: S = H_x P
     // H_x^T + R from the 6x6 blocks of P the clones' rows touch, gamma by the least-squares
@@ -590,7 +591,7 @@ void marginalize_oldest(sfd_window_t *w) {
         }
         t.used -= 1;
         t.first_clone += 1;
-        t.depth_m = 0.0;
+        t.depth_m = 0.0F;
     }
     // Rows/columns kImu..kImu+5 removed: the later ones move up by 6.
     for (int i = 0; i < n; ++i) {
@@ -845,8 +846,10 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
             std::memset(t, 0, sizeof *t);
             t->id = o.track_id;
             t->first_clone = newest;
-            t->depth_m = (o.depth_m > 0.0) ? o.depth_m : 0.0;
-            t->depth_var_m2 = o.depth_var_m2;
+            // a prior float can hold, or none (core_private.hpp)
+            const bool prior = o.depth_m > 0.0 && depth_prior_fits_float(o.depth_m, o.depth_var_m2);
+            t->depth_m = prior ? static_cast<float>(o.depth_m) : 0.0F;
+            t->depth_var_m2 = prior ? static_cast<float>(o.depth_var_m2) : 0.0F;
             index_insert(w, o.track_id, static_cast<int16_t>(w->num_tracks));
             w->num_tracks++;
         }
@@ -995,11 +998,11 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
             return SFD_ERR_INVAL;
         }
     }
-    const bool depth_row = w->prm.use_depth_prior && std::isfinite(obs->depth_m) &&
-                           obs->depth_m > 0.0 && std::isfinite(obs->depth_var_m2) &&
-                           obs->depth_var_m2 >= 0.0;
-    t.depth_m = depth_row ? obs->depth_m : 0.0;
-    t.depth_var_m2 = depth_row ? obs->depth_var_m2 : 0.0;
+    // a prior float can hold, as the window's tracks keep it (core_private.hpp)
+    const bool depth_row = w->prm.use_depth_prior && obs->depth_m > 0.0 &&
+                           depth_prior_fits_float(obs->depth_m, obs->depth_var_m2);
+    t.depth_m = depth_row ? static_cast<float>(obs->depth_m) : 0.0F;
+    t.depth_var_m2 = depth_row ? static_cast<float>(obs->depth_var_m2) : 0.0F;
     flush(w);
     CamPose pose[SFD_MAX_WINDOW];
     Vec3 p_I[SFD_MAX_WINDOW];
@@ -1073,8 +1076,8 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
             hp[r][3 + j] = dth(2, j);
             tr.Hf[r][j] = pose[dk].R_WtoC(2, j);
         }
-        tr.r[r] = t.depth_m - pc.z();
-        S[r][r] = t.depth_var_m2 + w->prm.depth_var_floor_m2;
+        tr.r[r] = static_cast<double>(t.depth_m) - pc.z();
+        S[r][r] = static_cast<double>(t.depth_var_m2) + w->prm.depth_var_floor_m2;
     }
     add_pose_covariance(*w, m, cols, hp, frame_rows, frame_nrows, S);
     return sfd_msckf_track_statistic(&tr, tr.R, gamma, dof);

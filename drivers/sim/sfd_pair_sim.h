@@ -23,7 +23,9 @@ typedef struct {
     sfd_ekf_camera_t cam;
     double prev_R_CtoW[9], prev_p_C[3];
     double true_R_ItoW[9], true_p_I[3];
-    sfd_match_t m[SIM_PAIR_MAX];
+    sfd_match_t m[SIM_PAIR_MAX]; /* their landmarks point into landmark_W_m / landmark_cov_m2 */
+    double landmark_W_m[SIM_PAIR_MAX][3];
+    double landmark_cov_m2[SIM_PAIR_MAX][9];
     uint8_t outlier[SIM_PAIR_MAX];
     int n;
 } sim_pair_t;
@@ -59,6 +61,16 @@ static inline int sim_pair_project_px(const sfd_ekf_camera_t *cam, const double 
     uv[0] = cam->fx_px * c[0] / c[2] + cam->cx_px;
     uv[1] = cam->fy_px * c[1] / c[2] + cam->cy_px;
     return uv[0] > 0 && uv[0] < 752 && uv[1] > 0 && uv[1] < 480;
+}
+
+/* dst = src with dst's matches referring to dst's own landmarks. */
+static inline void sim_pair_copy(sim_pair_t *dst, const sim_pair_t *src) {
+    memcpy(dst, src, sizeof *dst);
+    for (int i = 0; i < SIM_PAIR_MAX; ++i) {
+        if (src->m[i].landmark_W_m == NULL) continue;
+        dst->m[i].landmark_W_m = dst->landmark_W_m[i];
+        dst->m[i].landmark_cov_m2 = dst->landmark_cov_m2[i];
+    }
 }
 
 static inline int sim_pair_make(sim_pair_t *pr, const sim_pair_opts_t *o, uint64_t seed) {
@@ -134,14 +146,16 @@ static inline int sim_pair_make(sim_pair_t *pr, const sim_pair_opts_t *o, uint64
         sfd_match_t *m = &pr->m[n];
         for (int k = 0; k < 2; ++k) {
             m->prev_uv_px[k] = uv0[k] + o->sigma_px * sfd_prng_gaussian(&rng);
-            m->obs.uv_px[k] = uv1[k] + o->sigma_px * sfd_prng_gaussian(&rng);
+            m->uv_px[k] = uv1[k] + o->sigma_px * sfd_prng_gaussian(&rng);
         }
         /* the filter's landmark: truth + N(0, 0.02^2 I) with that covariance */
         for (int k = 0; k < 3; ++k) {
             const double lm_sigma = (o->sigma_px > 0.0) ? 0.02 : 0.0; /* noise-free: exact map */
-            m->obs.landmark_W_m[k] = L[k] + lm_sigma * sfd_prng_gaussian(&rng);
-            m->obs.landmark_cov_m2[(size_t)4 * (size_t)k] = lm_sigma * lm_sigma;
+            pr->landmark_W_m[n][k] = L[k] + lm_sigma * sfd_prng_gaussian(&rng);
+            pr->landmark_cov_m2[n][(size_t)4 * (size_t)k] = lm_sigma * lm_sigma;
         }
+        m->landmark_W_m = pr->landmark_W_m[n];
+        m->landmark_cov_m2 = pr->landmark_cov_m2[n];
         ++n;
     }
     pr->n = n;
@@ -156,18 +170,17 @@ static inline int sim_pair_make(sim_pair_t *pr, const sim_pair_opts_t *o, uint64
         sfd_match_t *m = &pr->m[i];
         if (o->structured) {
             const double mag = 3.0 + 12.0 * sfd_prng_uniform(&rng);
-            m->obs.uv_px[0] += mag * cos(shift_dir);
-            m->obs.uv_px[1] += mag * sin(shift_dir);
+            m->uv_px[0] += mag * cos(shift_dir);
+            m->uv_px[1] += mag * sin(shift_dir);
         } else {
             double u, v;
             do { /* uniform in the image, at least 20 px from the true position */
                 u = 752.0 * sfd_prng_uniform(&rng);
                 v = 480.0 * sfd_prng_uniform(&rng);
-            } while ((u - m->obs.uv_px[0]) * (u - m->obs.uv_px[0]) +
-                         (v - m->obs.uv_px[1]) * (v - m->obs.uv_px[1]) <
+            } while ((u - m->uv_px[0]) * (u - m->uv_px[0]) + (v - m->uv_px[1]) * (v - m->uv_px[1]) <
                      400.0);
-            m->obs.uv_px[0] = u;
-            m->obs.uv_px[1] = v;
+            m->uv_px[0] = u;
+            m->uv_px[1] = v;
         }
     }
     return 0;

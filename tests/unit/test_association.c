@@ -195,7 +195,7 @@ static void same_seed_gives_identical_verdicts(void **state) {
     ap.seed = 77;
     const sim_pair_opts_t o = sim_pair_default_opts();
     sim_pair_make(&p1, &o, 9);
-    p2 = p1;
+    sim_pair_copy(&p2, &p1);
     assert_status(sfd_assoc_init(&a1, &ap), SFD_OK);
     assert_status(sfd_assoc_init(&a2, &ap), SFD_OK);
     assert_status(
@@ -224,7 +224,7 @@ static void distort_pair(sim_pair_t *pr, double sigma, uint64_t seed, int jacobi
     pr->cam.pixel_sigma_px = sigma;
     for (int i = 0; i < pr->n; ++i) {
         sfd_match_t *m = &pr->m[i];
-        double *uv[2] = {m->prev_uv_px, m->obs.uv_px};
+        double *uv[2] = {m->prev_uv_px, m->uv_px};
         float *dc[2] = {m->noise.prev_dC, m->noise.curr_dC};
         for (int f = 0; f < 2; ++f) {
             const double xn[2] = {(uv[f][0] - kEurocCx) / kEurocFx,
@@ -350,16 +350,22 @@ static void invalid_matches_are_untested_and_bad_arguments_rejected(void **state
     o.n = 30;
     sim_pair_make(&pair, &o, 4);
     for (int k = 0; k < 3; ++k) {
-        pair.m[0].obs.landmark_W_m[k] = 2.0 * pair.prev_p_C[k] - pair.m[0].obs.landmark_W_m[k];
+        pair.landmark_W_m[0][k] = 2.0 * pair.prev_p_C[k] - pair.landmark_W_m[0][k];
     }
-    pair.m[1].obs.uv_px[0] = NAN;
+    pair.m[1].uv_px[0] = NAN;
+    pair.m[2].landmark_W_m = NULL; /* no landmark: unusable, as one behind the camera */
+    pair.m[3].landmark_cov_m2 = NULL;
+    pair.landmark_cov_m2[4][8] = NAN; /* a landmark covariance not finite */
     assert_status(sfd_assoc_run(&assoc, &g_aw, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
                                 pair.prev_p_C, pair.m, pair.n, &res),
                   SFD_OK);
     assert_int_equal(res.status[0], SFD_VERDICT_UNTESTED);
     assert_int_equal(res.status[1], SFD_VERDICT_UNTESTED);
-    assert_int_equal(res.num_untested, 2);
-    assert_int_equal(res.num_consistent + res.num_spurious, pair.n - 2);
+    assert_int_equal(res.status[2], SFD_VERDICT_UNTESTED);
+    assert_int_equal(res.status[3], SFD_VERDICT_UNTESTED);
+    assert_int_equal(res.status[4], SFD_VERDICT_UNTESTED);
+    assert_int_equal(res.num_untested, 5);
+    assert_int_equal(res.num_consistent + res.num_spurious, pair.n - 5);
     assert_status(sfd_assoc_run(&assoc, &g_aw, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
                                 pair.prev_p_C, pair.m, SFD_MAX_FEATURES + 1, &res),
                   SFD_ERR_INVAL);
@@ -394,7 +400,7 @@ static void select_then_apply_equals_run_and_checks_its_sequence(void **state) {
     sfd_assoc_params_default(&ap);
     const sim_pair_opts_t o = sim_pair_default_opts();
     assert_int_equal(sim_pair_make(&p1, &o, 21), 0);
-    p2 = p1;
+    sim_pair_copy(&p2, &p1);
     assert_status(sfd_assoc_init(&a1, &ap), SFD_OK);
     assert_status(sfd_assoc_init(&a2, &ap), SFD_OK);
     assert_status(

@@ -23,14 +23,20 @@
 extern "C" {
 #endif
 
-/** One correspondence: the previous frame's observation of a track and the current one, with
- *  the track's landmark (sfd_ekf_obs_t carries the current undistorted pixel and the landmark)
- *  and the pixel noise of both observations through the distortion (zero: isotropic). */
+/** One correspondence: the previous frame's observation of a track and the current one, the
+ *  track's landmark and the pixel noise of both observations through the distortion (zero:
+ *  isotropic). The landmark is referred to, not copied (72 B a match on a 64-bit host instead of
+ *  152): the caller keeps it in place and unchanged while the match is used (the pipeline's
+ *  matches point into its landmark map's entries). A match whose landmark pointers are NULL or
+ *  whose values are not finite is judged unusable, as a landmark behind the camera is. */
 typedef struct {
-    double prev_uv_px[2];    /**< undistorted pixel in the previous frame */
-    sfd_ekf_obs_t obs;       /**< current undistorted pixel + landmark (world) with covariance */
-    sfd_pixel_noise_t noise; /**< covariances of both pixels in units of sigma^2, minus I
-                                  (sfd_camera_pixel_noise()); all zero = isotropic sigma^2 I */
+    double prev_uv_px[2];          /**< undistorted pixel in the previous frame */
+    double uv_px[2];               /**< undistorted pixel in the current frame */
+    const double *landmark_W_m;    /**< the track's landmark in the world (3 values, m) */
+    const double *landmark_cov_m2; /**< its covariance (9, row-major, symmetric PSD; zeros =
+                                        exact) */
+    sfd_pixel_noise_t noise;       /**< covariances of both pixels in units of sigma^2, minus I
+                                        (sfd_camera_pixel_noise()); all zero = isotropic */
 } sfd_match_t;
 
 /** Block width of OPRF's hypothesis scoring (floats scored together); the packed arrays below

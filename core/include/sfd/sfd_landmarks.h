@@ -6,7 +6,8 @@
  *        map (SPEC "LCM interface"). A track's landmark is initialized from its first
  *        observation and depth prior (sfd_landmark_init_from_ray) and refined by a gated 3x3 EKF
  *        update with each later observation (sfd_landmark_refine); the EKF and the association
- *        methods read it through sfd_landmark_to_obs() (an sfd_ekf_obs_t).
+ *        reads it through sfd_landmark_to_obs() (an sfd_ekf_obs_t), the association's matches
+ *        (sfd_match_t) refer to the entry in place.
  *
  * Conventions: rotations as in sfd_rotation.h (R_CtoW maps camera coordinates into the world);
  * camera z forward; xn are undistorted normalized coordinates (x/z, y/z) as sfd_camera_undistort

@@ -115,8 +115,8 @@ typedef struct {
          *  sfd_nav_advance() while the filter is not running (no window work then) */
         sfd_rest_t rest;
     } work;
-    int32_t match_feature[SFD_MAX_FEATURES]; /**< feature index of each match */
-    int32_t feature_match[SFD_MAX_FEATURES]; /**< match index of each feature, -1 for none */
+    int16_t match_feature[SFD_MAX_FEATURES]; /**< feature index of each match */
+    int16_t feature_match[SFD_MAX_FEATURES]; /**< match index of each feature, -1 for none */
     float xn[SFD_MAX_FEATURES][2]; /**< normalized undistorted coordinates, rounded to float as
                                         the parity detector stores them (the same bits whether
                                         or not it ran: sfd_parity_newest_xn) */
@@ -124,7 +124,7 @@ typedef struct {
     /* the previous frame (observations kept for the next frame's matches) */
     int32_t prev_n;
     int64_t prev_track[SFD_MAX_FEATURES];
-    double prev_uv[SFD_MAX_FEATURES][2];
+    float prev_uv[SFD_MAX_FEATURES][2]; /* undistorted pixels (float, as xn: a relative 6e-8) */
     /** track id -> first index in prev_track (open addressing, -1 empty), built with prev_track */
     int16_t prev_index[SFD_NAV_TRACK_SLOTS];
     double prev_R_CtoW[9];

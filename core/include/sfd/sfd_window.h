@@ -124,8 +124,9 @@ typedef struct {
     uint32_t first_clone; /**< sequence number of the clone of observation 0 */
     int32_t seen;         /**< 1: observed in the newest frame */
     int64_t id;
-    double depth_m; /**< depth prior of observation 0, <= 0: none */
-    double depth_var_m2;
+    float depth_m; /**< depth prior of observation 0, <= 0: none (float: one beyond float's
+                        range, or with a variance beyond it, is none) */
+    float depth_var_m2;
     /** the observations, stored as float (a relative 6e-8, far below the pixel noise; an
      *  observation outside float's range or whose covariance is not positive definite in float
      *  is refused) and used in double */
