@@ -357,7 +357,8 @@ sfd_status_t sfd_pipeline_start_at(sfd_pipeline_t *p, int64_t utime, const doubl
 sfd_status_t sfd_pipeline_known_landmark(sfd_pipeline_t *p, int64_t track_id, const double p_W_m[3],
                                          const double cov_m2[9], int64_t utime) {
     if (p == NULL) return SFD_ERR_INVAL;
-    if (!p->cfg.nav.enabled) return SFD_ERR_STATE;
+    /* not between a frame's stages: its matches refer to the map's entries (sfd_match_t) */
+    if (!p->cfg.nav.enabled || p->cur_slot >= 0) return SFD_ERR_STATE;
     return sfd_landmark_set(&p->nav.map, track_id, p_W_m, cov_m2, utime, NULL);
 }
 

@@ -410,7 +410,17 @@ static void a_known_map_and_start_localize_from_the_first_frame(void **state) {
             assert_int_equal(sfd_pipeline_push_imu(&g_p, &s), SFD_REJECT_NONE);
         } while (s.t_us < g_frame.utime);
         assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_NONE);
-        assert_status(sfd_pipeline_judge(&g_p), SFD_OK);
+        if (f == 30) { /* between the stages the map may not change: matches refer to it */
+            assert_status(sfd_pipeline_detect(&g_p), SFD_OK);
+            assert_status(sfd_pipeline_known_landmark(&g_p, 100, L0, cov, g_frame.utime),
+                          SFD_ERR_STATE);
+            assert_status(sfd_pipeline_associate(&g_p), SFD_OK);
+            assert_status(sfd_pipeline_known_landmark(&g_p, 100, L0, cov, g_frame.utime),
+                          SFD_ERR_STATE);
+            assert_status(sfd_pipeline_update(&g_p), SFD_OK);
+        } else {
+            assert_status(sfd_pipeline_judge(&g_p), SFD_OK);
+        }
         const sfd_pipeline_output_t *o = sfd_pipeline_output(&g_p);
         assert_int_equal(o->has_state, 1);
         /* untested: only tracks flagged in the previous frame (their observation was dropped) */

@@ -227,7 +227,9 @@ sfd_status_t sfd_pipeline_start_at(sfd_pipeline_t *p, int64_t utime, const doubl
  *        larger than that shortly before the frames that see it. Works with the single-state EKF
  * (filter.window_filter = 0); the window filter triangulates its own points and does not read the
  * map.
- * @return as sfd_landmark_set(); SFD_ERR_STATE when the filter is not enabled.
+ * @return as sfd_landmark_set(); SFD_ERR_STATE when the filter is not enabled, or between the
+ *         stages of a frame (after sfd_pipeline_detect(), before sfd_pipeline_update() has
+ *         finished it: the frame's matches refer to the map's entries).
  */
 sfd_status_t sfd_pipeline_known_landmark(sfd_pipeline_t *p, int64_t track_id, const double p_W_m[3],
                                          const double cov_m2[9], int64_t utime);
