@@ -452,7 +452,8 @@ int main(int argc, char **argv) {
         sfdcli::real_setter(&opt.ramp_s, 0.1, 600.0));
     add("gyro-noise-rad-s-rthz", "D", "log",
         "gyro white noise density (3.4e-4 rad/s/sqrt(Hz)); the IMU model's\n"
-        "four densities are those of the filter.* keys of apps/config/sfd.yaml\n"
+        "densities are sfd_ekf_noise_default()'s (the shipped filter.* keys assume\n"
+        "three times the white noise, for a real IMU)\n"
         "(per 5 ms sample: sigma = D / sqrt(dt), bias += D_rw sqrt(dt) N(0, 1))",
         sfdcli::real_setter(&opt.gyro_noise, 0.0, 1.0));
     add("accel-noise-m-s2-rthz", "D", "log",

@@ -14,6 +14,15 @@ void sfd_nav_config_default(sfd_nav_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
     cfg->enabled = 1;
     sfd_ekf_noise_default(&cfg->noise);
+    /* White noise about three times the datasheet-level densities of sfd_ekf_noise_default():
+     * a real IMU's errors beyond its white noise and bias walk (vibration, scale factor,
+     * misalignment, timing) show as extra white noise to the filter. On the real EuRoC V1_02 IMU
+     * the datasheet values left the position NEES at 8 (covariance 2.7 times too small); these
+     * bring it to 3.2 and the ATE from 0.034 to 0.026 m, while the simulated flights, whose IMU
+     * follows the datasheet values exactly, stay near consistent (NEES 2.0-2.3) at an ATE 0-8 %
+     * larger (docs/evaluation.md "IMU noise for a real IMU"). */
+    cfg->noise.gyro_noise_rad_s_rthz = 1.0e-3;
+    cfg->noise.accel_noise_m_s2_rthz = 1.2e-2;
     for (int k = 0; k < 3; ++k) {
         cfg->p0_diag[SFD_EKF_IDX_P + k] = 1e-6;
         cfg->p0_diag[SFD_EKF_IDX_V + k] = 1e-4;

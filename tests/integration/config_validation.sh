@@ -85,10 +85,10 @@ bad() {
 }
 
 # --- bad config files: the defects of issue 18 ------------------------------------------------
-bad gyro_nan 's/gyro_noise_rad_s_rthz: 3.4e-4/gyro_noise_rad_s_rthz: .nan/'
+bad gyro_nan 's/gyro_noise_rad_s_rthz: 1.0e-3/gyro_noise_rad_s_rthz: .nan/'
 both "gyro_nan.yaml: filter.gyro_noise_rad_s_rthz: nan is not finite" --config gyro_nan.yaml
-bad accel_neg 's/accel_noise_m_s2_rthz: 4.0e-3/accel_noise_m_s2_rthz: -4.0e-3/'
-both "accel_neg.yaml: filter.accel_noise_m_s2_rthz: -0.004 is not >= 0" --config accel_neg.yaml
+bad accel_neg 's/accel_noise_m_s2_rthz: 1.2e-2/accel_noise_m_s2_rthz: -1.2e-2/'
+both "accel_neg.yaml: filter.accel_noise_m_s2_rthz: -0.012 is not >= 0" --config accel_neg.yaml
 bad gravity 's/gravity_m_s2: 9.81/gravity_m_s2: -9.81/'
 both "gravity.yaml: filter.gravity_m_s2: -9.81 is not > 0" --config gravity.yaml
 bad enabled 's/enabled: 1/enabled: 7/'

@@ -68,11 +68,12 @@ typedef struct {
                                          the gyro bias is params.gyro_bias_rad_s */
 } sfd_nav_config_t;
 
-/** @brief Defaults: enabled; sfd_ekf_noise_default(); P0 position 1e-6 m^2 (the origin is
- *         defined by the start), velocity 1e-4, attitude 1e-4 rad^2 (yaw 1e-6), gyro bias 1e-4,
- *         accel bias 1e-2; 1 s at rest with the gyro bias from it; unknown depth variance
- *         100 m^2; landmarks dropped after 2 s unseen; gate alpha 0.001; 1 px parallax; start
- *         at rest (not from TRUTH); position as a consider state. */
+/** @brief Defaults: enabled; sfd_ekf_noise_default() with white noise 1.0e-3 rad/s/sqrt(Hz)
+ *         and 1.2e-2 m/s^2/sqrt(Hz) (about three times, for a real IMU: nav.c); P0 position 1e-6
+ * m^2 (the origin is defined by the start), velocity 1e-4, attitude 1e-4 rad^2 (yaw 1e-6), gyro
+ * bias 1e-4, accel bias 1e-2; 1 s at rest with the gyro bias from it; unknown depth variance 100
+ * m^2; landmarks dropped after 2 s unseen; gate alpha 0.001; 1 px parallax; start at rest (not from
+ * TRUTH); position as a consider state. */
 void sfd_nav_config_default(sfd_nav_config_t *cfg);
 
 typedef struct {
