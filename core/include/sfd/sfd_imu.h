@@ -44,8 +44,8 @@ static inline sfd_imu_sample_t sfd_imu_unpack(const sfd_imu_packed_t *p) {
     sfd_imu_sample_t s;
     s.t_us = p->t_us;
     for (int k = 0; k < 3; ++k) {
-        s.gyro_rad_s[k] = (double)p->gyro_rad_s[k];
-        s.accel_m_s2[k] = (double)p->accel_m_s2[k];
+        s.gyro_rad_s[k] = p->gyro_rad_s[k]; /* float to double: exact */
+        s.accel_m_s2[k] = p->accel_m_s2[k];
     }
     return s;
 }
