@@ -6,6 +6,7 @@
 #ifndef SFD_CORE_PRIVATE_HPP
 #define SFD_CORE_PRIVATE_HPP
 
+#include "float_round.h"
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -44,11 +45,7 @@ inline bool all_finite(const double *v, std::size_t n) {
 /// True when every entry fits a float's range (|v| <= FLT_MAX; NaN does not): the check before
 /// a double is stored as float (a cast of a larger value is undefined behaviour).
 inline bool fits_float(const double *v, std::size_t n) {
-    constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
-    for (std::size_t i = 0; i < n; ++i) {
-        if (!(std::fabs(v[i]) <= kFloatMax)) return false;
-    }
-    return true;
+    return sfd_fits_float(v, static_cast<int>(n)) != 0;
 }
 
 /// A double clamped into a float's range, then stored as float (NaN stays NaN).

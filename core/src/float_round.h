@@ -3,6 +3,8 @@
 #ifndef SFD_FLOAT_ROUND_H
 #define SFD_FLOAT_ROUND_H
 
+#include <float.h>
+#include <math.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -27,6 +29,15 @@ static inline double sfd_float_round_trip(double x) {
 #endif
     memcpy(&f, &u, sizeof f);
     return SFD_FLOAT_ROUND_CAST(double, f);
+}
+
+/* 1 when each of the @p n doubles is finite and within float's range (float storage can hold
+ * it), else 0 (NaN included). */
+static inline int sfd_fits_float(const double *v, int n) {
+    for (int i = 0; i < n; ++i) {
+        if (!(fabs(v[i]) <= FLT_MAX)) return 0;
+    }
+    return 1;
 }
 
 #endif /* SFD_FLOAT_ROUND_H */

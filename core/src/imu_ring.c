@@ -1,9 +1,9 @@
 /* SPDX-License-Identifier: MIT */
 #include "sfd/sfd_imu_ring.h"
 
-#include <float.h>
-#include <math.h>
 #include <string.h>
+
+#include "float_round.h"
 
 void sfd_imu_ring_init(sfd_imu_ring_t *ring) {
     ring->head = 0;
@@ -31,11 +31,10 @@ int sfd_imu_ring_push(sfd_imu_ring_t *ring, const sfd_imu_sample_t *sample) {
     if (ring->count > 0 && sample->t_us <= sfd_imu_ring_newest(ring)) return SFD_REJECT_ORDER;
     sfd_imu_packed_t packed;
     packed.t_us = sample->t_us;
+    if (!sfd_fits_float(sample->gyro_rad_s, 3) || !sfd_fits_float(sample->accel_m_s2, 3)) {
+        return SFD_REJECT_NONFINITE;
+    }
     for (int k = 0; k < 3; ++k) {
-        /* |x| <= FLT_MAX is false for NaN too */
-        if (!(fabs(sample->gyro_rad_s[k]) <= FLT_MAX && fabs(sample->accel_m_s2[k]) <= FLT_MAX)) {
-            return SFD_REJECT_NONFINITE;
-        }
         packed.gyro_rad_s[k] = (float)sample->gyro_rad_s[k];
         packed.accel_m_s2[k] = (float)sample->accel_m_s2[k];
     }

@@ -1,7 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 #include "sfd/sfd_nav.h"
 
-#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -428,7 +427,7 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
         nav->ok[i] = (uint8_t)((parity != NULL &&
                                 sfd_parity_newest_xn(parity, frame->utime, i, xn) == SFD_OK) ||
                                (sfd_camera_undistort(cam, uv_raw, xn, NULL) == SFD_OK &&
-                                fabs(xn[0]) <= FLT_MAX && fabs(xn[1]) <= FLT_MAX));
+                                sfd_fits_float(xn, 2)));
         if (!nav->ok[i]) continue;
         nav->xn[i][0] = (float)xn[0];
         nav->xn[i][1] = (float)xn[1];
@@ -573,7 +572,7 @@ void sfd_nav_finish(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *
                 continue;
             }
         }
-        if (!(fabs(uv[0]) <= FLT_MAX && fabs(uv[1]) <= FLT_MAX)) continue; /* kept as float */
+        if (!sfd_fits_float(uv, 2)) continue; /* kept as float */
         nav->prev_uv[nav->prev_n][0] = (float)uv[0];
         nav->prev_uv[nav->prev_n][1] = (float)uv[1];
         nav->prev_track[nav->prev_n] = id;
