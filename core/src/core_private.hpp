@@ -20,6 +20,7 @@
 #include <Eigen/LU>
 
 #include "sfd/sfd_config.h"
+#include "sfd/sfd_msckf.h"
 #include "sfd/sfd_status.h"
 
 #pragma GCC poison malloc calloc realloc free aligned_alloc posix_memalign
@@ -117,6 +118,13 @@ inline double median_in_place(float *v, int n) {
     return (n % 2 == 1) ? static_cast<double>(v[n / 2])
                         : 0.5 * (static_cast<double>(v[n / 2 - 1]) + static_cast<double>(v[n / 2]));
 }
+
+/// sfd_msckf_track_statistic() (eq. (3) without forming N) over the rows first..t.rows - 1 of the
+/// unprojected track alone: their blocks of S, H_f and r (msckf_update.cpp). At least 4 rows, else
+/// SFD_ERR_INVAL; the caller has checked the track and S.
+sfd_status_t msckf_statistic_from(const sfd_msckf_track_t &t,
+                                  const double (*S)[SFD_MSCKF_TRACK_ROWS], int first, double *gamma,
+                                  int32_t *dof);
 
 }  // namespace sfd
 

@@ -176,22 +176,25 @@ extern "C" sfd_status_t sfd_msckf_track_gate(const sfd_msckf_track_t *t, const d
     return SFD_OK;
 }
 
-extern "C" sfd_status_t sfd_msckf_track_statistic(const sfd_msckf_track_t *t,
-                                                  const double (*S)[SFD_MSCKF_TRACK_ROWS],
-                                                  double *gamma, int32_t *dof) {
-    if (t == nullptr || S == nullptr || gamma == nullptr || dof == nullptr || t->projected != 0 ||
-        t->rows < 4 || t->rows > kRows) {
-        return SFD_ERR_INVAL;
+sfd_status_t sfd::msckf_statistic_from(const sfd_msckf_track_t &t,
+                                       const double (*S)[SFD_MSCKF_TRACK_ROWS], int first,
+                                       double *gamma, int32_t *dof) {
+    const int rows = t.rows - first;
+    if (first < 0 || rows < 4) return SFD_ERR_INVAL;
+    // The rows first..t.rows-1: their block of S, of H_f and of r (a block of a covariance is
+    // the covariance of those rows).
+    double Sb[kRows][kRows];
+    for (int i = 0; i < rows; ++i) {
+        for (int j = 0; j <= i; ++j) Sb[i][j] = S[first + i][first + j];
     }
-    const int rows = t->rows;
     // S = L L^T; w = L^-1 r; G = L^-1 H_f (column by column).
     double L[kRows][kRows];
-    if (!la::cholesky(S, rows, L)) return SFD_ERR_NUMERIC;
+    if (!la::cholesky(Sb, rows, L)) return SFD_ERR_NUMERIC;
     double w[kRows];
-    la::forward_solve(L, rows, t->r, w);
+    la::forward_solve(L, rows, t.r + first, w);
     double G[3][kRows];
     for (int c = 0; c < 3; ++c) {
-        for (int i = 0; i < rows; ++i) G[c][i] = t->Hf[i][c];
+        for (int i = 0; i < rows; ++i) G[c][i] = t.Hf[first + i][c];
         la::forward_solve(L, rows, G[c], G[c]);
     }
     double A[3][3];  // G^T G
@@ -219,6 +222,16 @@ extern "C" sfd_status_t sfd_msckf_track_statistic(const sfd_msckf_track_t *t,
     *gamma = std::fmax(g_stat, 0.0);  // a perfect fit can round to -eps
     *dof = rows - 3;
     return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_msckf_track_statistic(const sfd_msckf_track_t *t,
+                                                  const double (*S)[SFD_MSCKF_TRACK_ROWS],
+                                                  double *gamma, int32_t *dof) {
+    if (t == nullptr || S == nullptr || gamma == nullptr || dof == nullptr || t->projected != 0 ||
+        t->rows < 4 || t->rows > kRows) {
+        return SFD_ERR_INVAL;
+    }
+    return msckf_statistic_from(*t, S, 0, gamma, dof);
 }
 
 extern "C" sfd_status_t sfd_msckf_stack_reset(sfd_msckf_stack_t *s, int32_t n) {

@@ -546,33 +546,43 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         // with the poses known, two frames already leave a residual.
         const int m_short = newest.run < L ? newest.run : L;
         if (!newest.valid || m_short < 2) continue;
-        load_track(det, i, m_short, scale, &obs);
-        double gamma = 0.0;
-        int32_t dof = 0;
+        // The evidence window: the segment since the last alarm, as far back as the clones reach.
+        // When it is longer than L, both tests come from one linearization over it (the L-frame
+        // test is the statistic of its newest L frames' rows; sfd_window_test_track_nested);
+        // when that fails (e.g. an old observation puts the point behind a camera), or there is
+        // no evidence window, the L-frame test alone.
+        const int m_ev = newest.segment < m_max ? newest.segment : m_max;
+        double gam[2] = {0.0, 0.0};
+        int32_t dofs[2] = {0, 0};
+        sfd_status_t st = SFD_ERR_STATE;
+        if (evidence && m_ev > L && m_short == L) {
+            load_track(det, i, m_ev, scale, &obs);
+            st = sfd_window_test_track_nested(filter, &ext, &obs, L, scratch, gam, dofs);
+        }
+        const bool have_evidence = (st == SFD_OK);
+        if (!have_evidence) {
+            load_track(det, i, m_short, scale, &obs);
+            st = sfd_window_test_track(filter, &ext, &obs, scratch, &gam[0], &dofs[0]);
+        }
         sfd_feature_result_t *v = &out->features[i];
-        sfd_status_t st = sfd_window_test_track(filter, &ext, &obs, scratch, &gamma, &dof);
-        if (st != SFD_OK || dof < 1 || dof > SFD_PARITY_MAX_RESIDUAL) {
+        if (st != SFD_OK || dofs[0] < 1 || dofs[0] > SFD_PARITY_MAX_RESIDUAL) {
             v->reason = (st == SFD_ERR_NUMERIC) ? SFD_REASON_RANK : SFD_REASON_NUMERIC;
             continue;
         }
-        double thr = tab.threshold[dof];
-        u[n_u++] = static_cast<float>(gamma / det.chi2_median.threshold[dof]);
-        if (gamma > thr) {
-            set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_FEATURE_TEST, dof, gamma, thr);
+        double thr = tab.threshold[dofs[0]];
+        u[n_u++] = static_cast<float>(gam[0] / det.chi2_median.threshold[dofs[0]]);
+        if (gam[0] > thr) {
+            set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_FEATURE_TEST, dofs[0], gam[0], thr);
             v->fault_kind = SFD_FAULT_UNKNOWN;
             out->flags |= SFD_FLAG_PARITY_ALARM;
             newest.segment = 1;  // an alarm: the track's segment starts again here
             continue;
         }
-        set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, dof, gamma, thr);
-        const int m = newest.segment < m_max ? newest.segment : m_max;
-        if (!evidence || m <= L) continue;
-        load_track(det, i, m, scale, &obs);
-        st = sfd_window_test_track(filter, &ext, &obs, scratch, &gamma, &dof);
-        if (st != SFD_OK || dof < 1 || dof > SFD_PARITY_MAX_RESIDUAL) continue;
-        thr = tab.threshold[dof];
-        if (gamma > thr) {
-            set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_EVIDENCE, dof, gamma, thr);
+        set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, dofs[0], gam[0], thr);
+        if (!have_evidence || dofs[1] < 1 || dofs[1] > SFD_PARITY_MAX_RESIDUAL) continue;
+        thr = tab.threshold[dofs[1]];
+        if (gam[1] > thr) {
+            set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_EVIDENCE, dofs[1], gam[1], thr);
             v->fault_kind = SFD_FAULT_DRIFT;
             out->flags |= SFD_FLAG_PARITY_ALARM;
         }

@@ -972,14 +972,15 @@ extern "C" sfd_status_t sfd_window_position_var(sfd_window_t *w, double var_m2[3
     return SFD_OK;
 }
 
-extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
-                                              const sfd_window_test_obs_t *obs,
-                                              sfd_window_scratch_t *scratch, double *gamma,
-                                              int32_t *dof) {
-    if (w == nullptr || ext == nullptr || obs == nullptr || scratch == nullptr ||
-        gamma == nullptr || dof == nullptr) {
-        return SFD_ERR_INVAL;
-    }
+namespace sfd {
+namespace {
+
+/// sfd_window_test_track() over obs's m frames (gamma[1], dof[1]) and, when 2 <= inner < m, the
+/// statistic of the newest `inner` frames' rows in the same linearization (gamma[0], dof[0];
+/// sfd_window_test_track_nested()). Arguments checked by the callers, except obs's content.
+sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
+                        const sfd_window_test_obs_t *obs, sfd_window_scratch_t *scratch, int inner,
+                        double gamma[2], int32_t dof[2]) {
     const int m = obs->frames;
     if (m < 2 || m > SFD_MAX_WINDOW) return SFD_ERR_INVAL;
     if (!w->started || w->num_clones < m - 1) return SFD_ERR_STATE;
@@ -1080,5 +1081,62 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
         S[r][r] = static_cast<double>(t.depth_var_m2) + w->prm.depth_var_floor_m2;
     }
     add_pose_covariance(*w, m, cols, hp, frame_rows, frame_nrows, S);
-    return sfd_msckf_track_statistic(&tr, tr.R, gamma, dof);
+    // The rows of the newest `inner` frames are the last ones (the depth row, when there is one,
+    // is the newest frame's and comes last).
+    if (inner >= 2 && inner < m) {
+        double g_in = 0.0;
+        int32_t d_in = 0;
+        const sfd_status_t si = msckf_statistic_from(tr, tr.R, 2 * (m - inner), &g_in, &d_in);
+        if (si != SFD_OK) return si;
+        double g_all = 0.0;
+        int32_t d_all = 0;
+        const sfd_status_t sa = msckf_statistic_from(tr, tr.R, 0, &g_all, &d_all);
+        if (sa != SFD_OK) return sa;
+        gamma[0] = g_in;
+        dof[0] = d_in;
+        gamma[1] = g_all;
+        dof[1] = d_all;
+        return SFD_OK;
+    }
+    return msckf_statistic_from(tr, tr.R, 0, &gamma[1], &dof[1]);
+}
+
+}  // namespace
+}  // namespace sfd
+
+extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
+                                              const sfd_window_test_obs_t *obs,
+                                              sfd_window_scratch_t *scratch, double *gamma,
+                                              int32_t *dof) {
+    if (w == nullptr || ext == nullptr || obs == nullptr || scratch == nullptr ||
+        gamma == nullptr || dof == nullptr) {
+        return SFD_ERR_INVAL;
+    }
+    double g[2] = {0.0, 0.0};
+    int32_t d[2] = {0, 0};
+    const sfd_status_t st = test_track(w, ext, obs, scratch, 0, g, d);
+    if (st != SFD_OK) return st;
+    *gamma = g[1];
+    *dof = d[1];
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_window_test_track_nested(sfd_window_t *w, const sfd_extrinsics_t *ext,
+                                                     const sfd_window_test_obs_t *obs,
+                                                     int32_t inner, sfd_window_scratch_t *scratch,
+                                                     double gamma[2], int32_t dof[2]) {
+    if (w == nullptr || ext == nullptr || obs == nullptr || scratch == nullptr ||
+        gamma == nullptr || dof == nullptr) {
+        return SFD_ERR_INVAL;
+    }
+    if (inner < 2 || inner >= obs->frames) return SFD_ERR_INVAL;
+    double g[2] = {0.0, 0.0};
+    int32_t d[2] = {0, 0};
+    const sfd_status_t st = test_track(w, ext, obs, scratch, inner, g, d);
+    if (st != SFD_OK) return st;
+    gamma[0] = g[0];
+    gamma[1] = g[1];
+    dof[0] = d[0];
+    dof[1] = d[1];
+    return SFD_OK;
 }

@@ -251,28 +251,45 @@ typedef struct {
     long tests, alarms; /* clean tracks: tests and statistics above chi2(dof, 0.99) */
     double sum_ratio;   /* sum of gamma / dof over them */
     int jump_alarm[4];  /* the jumped track at jump_frame + 0..3: 1 flagged */
+    /* sfd_window_test_track_nested over the last 5 frames, inner 3, of clean tracks seen in all
+     * five: tests, inner alarms, alarms that differ from the 3-frame test's, the largest
+     * |gamma_inner - gamma_3| / (1 + gamma_3), and m-frame statistics not bit-equal to
+     * sfd_window_test_track's over the 5 frames */
+    long nested, nested_alarms, nested_disagree, nested_outer_differ;
+    double nested_worst;
 } track_test_t;
 static track_test_t g_tt;
-static double g_hist_xn[NPTS][3][2]; /* the last three observations fed to the filter */
-static int g_hist_frame[NPTS][3];
+#define HIST 5
+static double g_hist_xn[NPTS][HIST][2]; /* the last HIST observations fed to the filter */
+static int g_hist_frame[NPTS][HIST];
+
+static void test_obs(int i, int frames, int64_t t0_us, int f, sfd_window_test_obs_t *o) {
+    memset(o, 0, sizeof *o);
+    o->frames = frames;
+    for (int k = 0; k < frames; ++k) {
+        const int h = HIST - frames + k;
+        o->utime[k] = t0_us + (int64_t)(f - frames + 1 + k) * 50000;
+        o->xn[k][0] = g_hist_xn[i][h][0];
+        o->xn[k][1] = g_hist_xn[i][h][1];
+        o->cov_xn[k][0] = o->cov_xn[k][2] = kSigmaXn * kSigmaXn;
+    }
+}
+
+static int seen_since(int i, int f, int frames) {
+    for (int k = 0; k < frames; ++k) {
+        if (g_hist_frame[i][HIST - 1 - k] != f - k) return 0;
+    }
+    return 1;
+}
 
 static void track_tests(const sfd_extrinsics_t *ext, int f, int64_t t0_us, int jump_track,
                         int jump_frame) {
     sfd_chi2_table_t chi2;
     assert_status(sfd_chi2_table_init(&chi2, 0.01), SFD_OK);
     for (int i = 0; i < NPTS; ++i) {
-        if (g_hist_frame[i][2] != f || g_hist_frame[i][1] != f - 1 || g_hist_frame[i][0] != f - 2) {
-            continue;
-        }
+        if (!seen_since(i, f, 3)) continue;
         sfd_window_test_obs_t o;
-        memset(&o, 0, sizeof o);
-        o.frames = 3;
-        for (int k = 0; k < 3; ++k) {
-            o.utime[k] = t0_us + (int64_t)(f - 2 + k) * 50000;
-            o.xn[k][0] = g_hist_xn[i][k][0];
-            o.xn[k][1] = g_hist_xn[i][k][1];
-            o.cov_xn[k][0] = o.cov_xn[k][2] = kSigmaXn * kSigmaXn;
-        }
+        test_obs(i, 3, t0_us, f, &o);
         double gamma = 0.0;
         int32_t dof = 0;
         const sfd_status_t st = sfd_window_test_track(&g_w, ext, &o, &g_ws, &gamma, &dof);
@@ -283,6 +300,25 @@ static void track_tests(const sfd_extrinsics_t *ext, int f, int64_t t0_us, int j
             if (f >= jump_frame && f < jump_frame + 4)
                 g_tt.jump_alarm[f - jump_frame] = gamma > chi2.threshold[dof];
             continue;
+        }
+        if (seen_since(i, f, 5)) {
+            sfd_window_test_obs_t o5;
+            test_obs(i, 5, t0_us, f, &o5);
+            double g2[2] = {0, 0}, g5 = 0.0;
+            int32_t d2[2] = {0, 0}, d5 = 0;
+            const sfd_status_t sn = sfd_window_test_track_nested(&g_w, ext, &o5, 3, &g_ws, g2, d2);
+            const sfd_status_t s5 = sfd_window_test_track(&g_w, ext, &o5, &g_ws, &g5, &d5);
+            assert_status(sn, s5); /* one linearization: the same outcome */
+            if (sn == SFD_OK) {
+                assert_int_equal(d2[0], 3);
+                assert_int_equal(d2[1], 7);
+                g_tt.nested++;
+                g_tt.nested_alarms += g2[0] > chi2.threshold[3];
+                g_tt.nested_disagree += (g2[0] > chi2.threshold[3]) != (gamma > chi2.threshold[3]);
+                g_tt.nested_outer_differ += !(g2[1] == g5 && d2[1] == d5);
+                const double rel = fabs(g2[0] - gamma) / (1.0 + gamma);
+                if (rel > g_tt.nested_worst) g_tt.nested_worst = rel;
+            }
         }
         g_tt.tests++;
         g_tt.alarms += gamma > chi2.threshold[dof];
@@ -393,12 +429,12 @@ static void run_flight_from(uint64_t seed, double seconds, int jac, int jump_tra
             obs[n].xn[1] = xn[1] + kSigmaXn * sfd_prng_gaussian(&rng);
             obs[n].cov_xn[0] = obs[n].cov_xn[2] = kSigmaXn * kSigmaXn;
             if (g_track_test) { /* history of what the filter was given */
-                for (int k = 0; k < 2; ++k) {
+                for (int k = 0; k + 1 < HIST; ++k) {
                     g_hist_frame[i][k] = g_hist_frame[i][k + 1];
                     memcpy(g_hist_xn[i][k], g_hist_xn[i][k + 1], sizeof g_hist_xn[i][k]);
                 }
-                g_hist_frame[i][2] = f;
-                memcpy(g_hist_xn[i][2], obs[n].xn, sizeof obs[n].xn);
+                g_hist_frame[i][HIST - 1] = f;
+                memcpy(g_hist_xn[i][HIST - 1], obs[n].xn, sizeof obs[n].xn);
             }
             ++n;
         }
@@ -635,12 +671,16 @@ static void a_jumped_track_is_gated_and_does_not_pull(void **state) {
  * statistic is chi2(3): the alarm rate at alpha = 0.01 is inside the 99 % binomial interval
  * (counted with a third of the tests as independent, since consecutive windows share two of
  * their three frames), the mean of gamma / dof is 1 within 5 %; and a track that jumps by 20 px
- * is flagged in the two windows that straddle the jump, not in the one after. */
+ * is flagged in the two windows that straddle the jump, not in the one after. AND the nested test
+ * over five frames (sfd_window_test_track_nested, inner 3): its 5-frame statistic is
+ * sfd_window_test_track's bit for bit, its inner statistic within 5 % of the 3-frame test's (one
+ * linearization at the 5-frame point instead of the 3-frame one: a second-order difference), its
+ * alarms the same in at least 99 % of the tests and its alarm rate inside the same interval. */
 static void the_track_test_with_the_filters_covariance_is_calibrated(void **state) {
     (void)state;
     memset(&g_tt, 0, sizeof g_tt);
     for (int i = 0; i < NPTS; ++i) {
-        for (int k = 0; k < 3; ++k) g_hist_frame[i][k] = -10;
+        for (int k = 0; k < HIST; ++k) g_hist_frame[i][k] = -10;
     }
     /* a point seen at frames 118..121 jumps at 120 */
     sfd_prng_t rng;
@@ -679,6 +719,29 @@ static void the_track_test_with_the_filters_covariance_is_calibrated(void **stat
     assert_int_equal(g_tt.jump_alarm[0], 1);
     assert_int_equal(g_tt.jump_alarm[1], 1);
     assert_int_equal(g_tt.jump_alarm[2], 0); /* all three frames after the jump: consistent */
+    const double nested_rate = (double)g_tt.nested_alarms / (double)g_tt.nested;
+    const double nested_half = 2.576 * sqrt(alpha * (1.0 - alpha) / ((double)g_tt.nested / 3.0));
+    printf(
+        "  nested (5 frames, inner 3): %ld tests, inner alarm rate %.4f (99%% interval +-%.4f), "
+        "%ld alarms differ from the 3-frame test's, largest |dgamma|/(1+gamma) %.2e, "
+        "%ld 5-frame statistics differ from sfd_window_test_track's\n",
+        g_tt.nested, nested_rate, nested_half, g_tt.nested_disagree, g_tt.nested_worst,
+        g_tt.nested_outer_differ);
+    assert_true(g_tt.nested > 5000);
+    assert_int_equal(g_tt.nested_outer_differ, 0);
+    assert_true(fabs(nested_rate - alpha) <= nested_half);
+    assert_true(g_tt.nested_disagree * 100 <= g_tt.nested); /* measured: 0 */
+    assert_true(g_tt.nested_worst < 0.05);                  /* measured: 1.1e-2 */
+    /* inner outside 2..m - 1: refused, nothing written */
+    sfd_window_test_obs_t o;
+    memset(&o, 0, sizeof o);
+    o.frames = 3;
+    double g2[2] = {-1.0, -1.0};
+    int32_t d2[2] = {-1, -1};
+    assert_status(sfd_window_test_track_nested(&g_w, &ext, &o, 3, &g_ws, g2, d2), SFD_ERR_INVAL);
+    assert_status(sfd_window_test_track_nested(&g_w, &ext, &o, 1, &g_ws, g2, d2), SFD_ERR_INVAL);
+    assert_status(sfd_window_test_track_nested(&g_w, &ext, &o, 2, NULL, g2, d2), SFD_ERR_INVAL);
+    assert_true(g2[0] == -1.0 && g2[1] == -1.0 && d2[0] == -1 && d2[1] == -1);
 }
 
 /* GIVEN the same 10 s flight from rest twice WHEN the second builds every frame's observations in

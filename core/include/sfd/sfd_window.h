@@ -287,6 +287,27 @@ sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
                                    const sfd_window_test_obs_t *obs, sfd_window_scratch_t *scratch,
                                    double *gamma, int32_t *dof);
 
+/**
+ * @brief sfd_window_test_track() over obs's m frames and, in the same linearization, over the
+ *        newest @p inner of them (parity_space.md "The evidence test"): the point is triangulated
+ *        once, over the m frames; the inner test is the statistic of the newest inner frames'
+ *        rows (and of the depth prior, the newest frame's), with their blocks of S, H_f and r (a
+ *        block of a covariance is the covariance of its rows). The projection onto H_f's left
+ *        null space removes the point's error to first order, so the inner statistic differs from
+ *        sfd_window_test_track() over those frames alone (whose point is triangulated from them)
+ *        at second order in the difference of the two points: chi2 with the same dof for a
+ *        static, correctly tracked feature. It costs one statistic instead of a second
+ *        linearization.
+ * @param inner 2 <= inner < m.
+ * @param gamma gamma[0] of the inner test, gamma[1] of the m-frame test; dof likewise.
+ * @return as sfd_window_test_track(); SFD_ERR_INVAL also for inner out of range. On any error
+ *         nothing is written to gamma and dof.
+ */
+sfd_status_t sfd_window_test_track_nested(sfd_window_t *w, const sfd_extrinsics_t *ext,
+                                          const sfd_window_test_obs_t *obs, int32_t inner,
+                                          sfd_window_scratch_t *scratch, double gamma[2],
+                                          int32_t dof[2]);
+
 /** @brief Position variance (m^2, x y z) of the IMU state. SFD_ERR_STATE when not started. */
 sfd_status_t sfd_window_position_var(sfd_window_t *w, double var_m2[3]);
 
