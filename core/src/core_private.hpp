@@ -14,6 +14,7 @@
 #include <cstring>
 #include <limits>
 #include <new>
+#include <utility>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -35,12 +36,18 @@ using Mat2 = Eigen::Matrix<double, 2, 2, Eigen::RowMajor>;
 using Mat3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 using Quat = Eigen::Quaternion<double>;
 
-/// True when every entry is finite (no NaN, no Inf).
+/// True when every entry is finite (no NaN, no Inf). Branch-free over the bits (as
+/// all_finite_repr below): an exponent field of all ones carries into bit 63 when one unit of the
+/// exponent is added to it, no other exponent does. Every entry is read (no early exit): for the
+/// few to few hundred entries of its calls that costs less than a branch per entry.
 inline bool all_finite(const double *v, std::size_t n) {
+    std::uint64_t acc = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        if (!std::isfinite(v[i])) return false;
+        std::uint64_t b = 0;
+        std::memcpy(&b, v + i, sizeof b);
+        acc |= (b & 0x7FF0000000000000ULL) + 0x0010000000000000ULL;
     }
-    return true;
+    return (acc >> 63) == 0;
 }
 
 /// True when every entry fits a float's range (|v| <= FLT_MAX; NaN does not): the check before
@@ -86,45 +93,93 @@ inline bool all_finite_repr(const void *p) {
     return ((acc[0] | acc[1]) >> 63) == 0;
 }
 
-// Median of v[0..n) (n >= 1), by a heap sort in place (no recursion, O(n log n)).
-inline double median_in_place(float *v, int n) {
+// Sorts v[lo..hi] ascending in place by a heap sort (no recursion, O(n log n)).
+inline void heap_sort_range(float *v, int lo, int hi) {
+    float *w = v + lo;
+    const int n = hi - lo + 1;
     for (int start = n / 2 - 1; start >= 0; --start) {
         int root = start;
         for (int guard = 0; guard < 32 && 2 * root + 1 < n; ++guard) {
             int child = 2 * root + 1;
-            if (child + 1 < n && v[child] < v[child + 1]) ++child;
-            if (!(v[root] < v[child])) break;
-            const float t = v[root];
-            v[root] = v[child];
-            v[child] = t;
+            if (child + 1 < n && w[child] < w[child + 1]) ++child;
+            if (!(w[root] < w[child])) break;
+            const float t = w[root];
+            w[root] = w[child];
+            w[child] = t;
             root = child;
         }
     }
     for (int end = n - 1; end > 0; --end) {
-        const float t = v[0];
-        v[0] = v[end];
-        v[end] = t;
+        const float t = w[0];
+        w[0] = w[end];
+        w[end] = t;
         int root = 0;
         for (int guard = 0; guard < 32 && 2 * root + 1 < end; ++guard) {
             int child = 2 * root + 1;
-            if (child + 1 < end && v[child] < v[child + 1]) ++child;
-            if (!(v[root] < v[child])) break;
-            const float x = v[root];
-            v[root] = v[child];
-            v[child] = x;
+            if (child + 1 < end && w[child] < w[child + 1]) ++child;
+            if (!(w[root] < w[child])) break;
+            const float x = w[root];
+            w[root] = w[child];
+            w[child] = x;
             root = child;
         }
     }
-    return (n % 2 == 1) ? static_cast<double>(v[n / 2])
-                        : 0.5 * (static_cast<double>(v[n / 2 - 1]) + static_cast<double>(v[n / 2]));
 }
 
-/// sfd_msckf_track_statistic() (eq. (3) without forming N) over the rows first..t.rows - 1 of the
-/// unprojected track alone: their blocks of S, H_f and r (msckf_update.cpp). At least 4 rows, else
-/// SFD_ERR_INVAL; the caller has checked the track and S.
-sfd_status_t msckf_statistic_from(const sfd_msckf_track_t &t,
-                                  const double (*S)[SFD_MSCKF_TRACK_ROWS], int first, double *gamma,
-                                  int32_t *dof);
+// Rearranges v[0..n) (1 <= n, 0 <= k < n, no NaN) so that v[k] is its k-th smallest value, with
+// v[0..k) <= v[k] <= v(k..n): Hoare partitions around the median of three (no recursion; each
+// pass shrinks the range), a heap sort of what is left after 64 passes (O(n log n) at worst,
+// O(n) expected). A NaN cannot make it loop or leave the array; v[k] is then some entry.
+inline float select_kth(float *v, int n, int k) {
+    int lo = 0, hi = n - 1;
+    for (int pass = 0; pass < 64 && lo < hi; ++pass) {
+        const int mid = lo + (hi - lo) / 2;
+        if (v[mid] < v[lo]) std::swap(v[mid], v[lo]);
+        if (v[hi] < v[lo]) std::swap(v[hi], v[lo]);
+        if (v[hi] < v[mid]) std::swap(v[hi], v[mid]);
+        const float pivot = v[mid];
+        int i = lo, j = hi;
+        while (i <= j) {  // i only rises, j only falls
+            while (i < hi && v[i] < pivot) ++i;
+            while (j > lo && pivot < v[j]) --j;
+            if (i <= j) {
+                std::swap(v[i], v[j]);
+                ++i;
+                --j;
+            }
+        }
+        // v[lo..j] <= pivot <= v[i..hi], and v(j..i) == pivot
+        if (k <= j) {
+            hi = j;
+        } else if (k >= i) {
+            lo = i;
+        } else {
+            return v[k];
+        }
+    }
+    if (lo < hi) heap_sort_range(v, lo, hi);
+    return v[k];
+}
+
+// Median of v[0..n) (n >= 1, no NaN), reordering v: the middle value, or the mean of the two
+// middle values (the larger is selected, the smaller is the largest below it).
+inline double median_in_place(float *v, int n) {
+    const int k = n / 2;
+    const float upper = select_kth(v, n, k);
+    if (n % 2 == 1) return static_cast<double>(upper);
+    float lower = v[0];
+    for (int i = 1; i < k; ++i) lower = (lower < v[i]) ? v[i] : lower;
+    return 0.5 * (static_cast<double>(lower) + static_cast<double>(upper));
+}
+
+/// sfd_msckf_track_statistic() (eq. (3) without forming N) of the unprojected track, gamma[1] and
+/// dof[1], and, when tail_first > 0, of its rows tail_first..t.rows - 1 alone (their blocks of S,
+/// H_f and r), gamma[0] and dof[0], from one factorization (msckf_update.cpp). SFD_ERR_INVAL for
+/// rows outside 4..SFD_MSCKF_TRACK_ROWS or a tail of fewer than 4 rows; SFD_ERR_NUMERIC as
+/// sfd_msckf_track_statistic(); nothing written on error. The caller has checked the pointers.
+sfd_status_t msckf_statistic_tail(const sfd_msckf_track_t &t,
+                                  const double (*S)[SFD_MSCKF_TRACK_ROWS], int tail_first,
+                                  double gamma[2], int32_t dof[2]);
 
 }  // namespace sfd
 

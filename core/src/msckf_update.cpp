@@ -176,51 +176,77 @@ extern "C" sfd_status_t sfd_msckf_track_gate(const sfd_msckf_track_t *t, const d
     return SFD_OK;
 }
 
-sfd_status_t sfd::msckf_statistic_from(const sfd_msckf_track_t &t,
-                                       const double (*S)[SFD_MSCKF_TRACK_ROWS], int first,
-                                       double *gamma, int32_t *dof) {
-    const int rows = t.rows - first;
-    if (first < 0 || rows < 4) return SFD_ERR_INVAL;
-    // The rows first..t.rows-1: their block of S, of H_f and of r (a block of a covariance is
-    // the covariance of those rows).
-    double Sb[kRows][kRows];
-    for (int i = 0; i < rows; ++i) {
-        for (int j = 0; j <= i; ++j) Sb[i][j] = S[first + i][first + j];
-    }
-    // S = L L^T; w = L^-1 r; G = L^-1 H_f (column by column).
-    double L[kRows][kRows];
-    if (!la::cholesky(Sb, rows, L)) return SFD_ERR_NUMERIC;
-    double w[kRows];
-    la::forward_solve(L, rows, t.r + first, w);
-    double G[3][kRows];
-    for (int c = 0; c < 3; ++c) {
-        for (int i = 0; i < rows; ++i) G[c][i] = t.Hf[first + i][c];
-        la::forward_solve(L, rows, G[c], G[c]);
-    }
+namespace sfd {
+namespace {
+
+/// gamma = |w|^2 - |M^-1 b|^2 over the first n rows of the whitened system (A = G^T G and b =
+/// G^T w summed over them; sfd_msckf_track_statistic()); false when A is not positive definite or
+/// the result is not finite.
+bool statistic_of_prefix(const double (*G)[kRows], const double *w, int n, double *gamma) {
     double A[3][3];  // G^T G
     double b[3];     // G^T w
     for (int c = 0; c < 3; ++c) {
         double v = 0.0;
-        for (int i = 0; i < rows; ++i) v += G[c][i] * w[i];
+        for (int i = 0; i < n; ++i) v += G[c][i] * w[i];
         b[c] = v;
         for (int d = 0; d <= c; ++d) {
-            double a = 0.0;
-            for (int i = 0; i < rows; ++i) a += G[c][i] * G[d][i];
-            A[c][d] = a;
-            A[d][c] = a;
+            double x = 0.0;
+            for (int i = 0; i < n; ++i) x += G[c][i] * G[d][i];
+            A[c][d] = x;
+            A[d][c] = x;
         }
     }
     double M[3][3];
     // A is formed from squares: a rank deficiency shows only above rounding (eps ~ 1e-16).
-    if (!la::cholesky(A, la::Dim<3>{}, M, 1e-14)) return SFD_ERR_NUMERIC;
+    if (!la::cholesky(A, la::Dim<3>{}, M, 1e-14)) return false;
     double c3[3];
     la::forward_solve(M, la::Dim<3>{}, b, c3);
     double ww = 0.0;
-    for (int i = 0; i < rows; ++i) ww += w[i] * w[i];
+    for (int i = 0; i < n; ++i) ww += w[i] * w[i];
     const double g_stat = ww - (c3[0] * c3[0] + c3[1] * c3[1] + c3[2] * c3[2]);
-    if (!std::isfinite(g_stat)) return SFD_ERR_NUMERIC;
+    if (!std::isfinite(g_stat)) return false;
     *gamma = std::fmax(g_stat, 0.0);  // a perfect fit can round to -eps
-    *dof = rows - 3;
+    return true;
+}
+
+}  // namespace
+}  // namespace sfd
+
+sfd_status_t sfd::msckf_statistic_tail(const sfd_msckf_track_t &t,
+                                       const double (*S)[SFD_MSCKF_TRACK_ROWS], int tail_first,
+                                       double gamma[2], int32_t dof[2]) {
+    const int rows = t.rows;
+    const int tail = rows - tail_first;
+    if (rows < 4 || rows > kRows || tail_first < 0 || (tail_first > 0 && tail < 4)) {
+        return SFD_ERR_INVAL;
+    }
+    // The rows in reverse order (the last first): the Cholesky factor of the reversed S starts
+    // with the factor of the tail's block, and forward substitution's first entries depend on
+    // the first rows only, so one factor whitens both systems.
+    double Sb[kRows][kRows];
+    for (int i = 0; i < rows; ++i) {
+        for (int j = 0; j <= i; ++j) Sb[i][j] = S[rows - 1 - i][rows - 1 - j];
+    }
+    // S = L L^T; w = L^-1 r; G = L^-1 H_f (column by column).
+    double L[kRows][kRows];
+    if (!la::cholesky(Sb, rows, L)) return SFD_ERR_NUMERIC;
+    double rb[kRows];
+    for (int i = 0; i < rows; ++i) rb[i] = t.r[rows - 1 - i];
+    double w[kRows];
+    la::forward_solve(L, rows, rb, w);
+    double G[3][kRows];
+    for (int c = 0; c < 3; ++c) {
+        for (int i = 0; i < rows; ++i) G[c][i] = t.Hf[rows - 1 - i][c];
+        la::forward_solve(L, rows, G[c], G[c]);
+    }
+    double g_all = 0.0;
+    if (!statistic_of_prefix(G, w, rows, &g_all)) return SFD_ERR_NUMERIC;
+    double g_tail = 0.0;
+    if (tail_first > 0 && !statistic_of_prefix(G, w, tail, &g_tail)) return SFD_ERR_NUMERIC;
+    gamma[0] = g_tail;
+    dof[0] = (tail_first > 0) ? tail - 3 : 0;
+    gamma[1] = g_all;
+    dof[1] = rows - 3;
     return SFD_OK;
 }
 
@@ -231,7 +257,13 @@ extern "C" sfd_status_t sfd_msckf_track_statistic(const sfd_msckf_track_t *t,
         t->rows < 4 || t->rows > kRows) {
         return SFD_ERR_INVAL;
     }
-    return msckf_statistic_from(*t, S, 0, gamma, dof);
+    double g[2] = {0.0, 0.0};
+    int32_t d[2] = {0, 0};
+    const sfd_status_t st = msckf_statistic_tail(*t, S, 0, g, d);
+    if (st != SFD_OK) return st;
+    *gamma = g[1];
+    *dof = d[1];
+    return SFD_OK;
 }
 
 extern "C" sfd_status_t sfd_msckf_stack_reset(sfd_msckf_stack_t *s, int32_t n) {

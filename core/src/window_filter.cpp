@@ -1082,23 +1082,9 @@ sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
     }
     add_pose_covariance(*w, m, cols, hp, frame_rows, frame_nrows, S);
     // The rows of the newest `inner` frames are the last ones (the depth row, when there is one,
-    // is the newest frame's and comes last).
-    if (inner >= 2 && inner < m) {
-        double g_in = 0.0;
-        int32_t d_in = 0;
-        const sfd_status_t si = msckf_statistic_from(tr, tr.R, 2 * (m - inner), &g_in, &d_in);
-        if (si != SFD_OK) return si;
-        double g_all = 0.0;
-        int32_t d_all = 0;
-        const sfd_status_t sa = msckf_statistic_from(tr, tr.R, 0, &g_all, &d_all);
-        if (sa != SFD_OK) return sa;
-        gamma[0] = g_in;
-        dof[0] = d_in;
-        gamma[1] = g_all;
-        dof[1] = d_all;
-        return SFD_OK;
-    }
-    return msckf_statistic_from(tr, tr.R, 0, &gamma[1], &dof[1]);
+    // is the newest frame's and comes last): both statistics from one factorization.
+    const int tail_first = (inner >= 2 && inner < m) ? 2 * (m - inner) : 0;
+    return msckf_statistic_tail(tr, tr.R, tail_first, gamma, dof);
 }
 
 }  // namespace
