@@ -292,6 +292,10 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, sfd_assoc_work_t *w
     const bool pack_oprf = (prm.method == SFD_METHOD_OPRF);
     const double inv_fx = 1.0 / cam->fx_px;
     const double inv_fy = 1.0 / cam->fy_px;
+    // locals: the loop's byte stores (valid[]) could alias the camera for the compiler
+    const double cx_px = cam->cx_px;
+    const double cy_px = cam->cy_px;
+    sfd_assoc_oprf_work_t *const ow = pack_oprf ? &a.work->oprf : nullptr;
     const std::size_t nbytes = static_cast<std::size_t>(n);
     std::memset(a.valid, 0, nbytes);
     std::memset(a.cur, 0, nbytes);
@@ -325,12 +329,12 @@ extern "C" sfd_status_t sfd_assoc_select(sfd_assoc_t *assoc, sfd_assoc_work_t *w
             w.x_curr[nv][0] = mt.uv_px[0];
             w.x_curr[nv][1] = mt.uv_px[1];
             w.noise[nv] = mt.noise;
-        } else if (pack_oprf) {  // OPRF's scoring inputs
-            sfd_assoc_oprf_work_t &w = a.work->oprf;
-            w.nx_prev_u[nv] = static_cast<float>((mt.prev_uv_px[0] - cam->cx_px) * inv_fx);
-            w.nx_prev_v[nv] = static_cast<float>((mt.prev_uv_px[1] - cam->cy_px) * inv_fy);
-            w.nx_curr_u[nv] = static_cast<float>((mt.uv_px[0] - cam->cx_px) * inv_fx);
-            w.nx_curr_v[nv] = static_cast<float>((mt.uv_px[1] - cam->cy_px) * inv_fy);
+        } else if (ow != nullptr) {  // OPRF's scoring inputs
+            sfd_assoc_oprf_work_t &w = *ow;
+            w.nx_prev_u[nv] = static_cast<float>((mt.prev_uv_px[0] - cx_px) * inv_fx);
+            w.nx_prev_v[nv] = static_cast<float>((mt.prev_uv_px[1] - cy_px) * inv_fy);
+            w.nx_curr_u[nv] = static_cast<float>((mt.uv_px[0] - cx_px) * inv_fx);
+            w.nx_curr_v[nv] = static_cast<float>((mt.uv_px[1] - cy_px) * inv_fy);
             w.dc_prev_xx[nv] = mt.noise.prev_dC[0];
             w.dc_prev_xy[nv] = mt.noise.prev_dC[1];
             w.dc_prev_yy[nv] = mt.noise.prev_dC[2];

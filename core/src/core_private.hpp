@@ -38,14 +38,27 @@ using Quat = Eigen::Quaternion<double>;
 
 /// True when every entry is finite (no NaN, no Inf). Branch-free over the bits (as
 /// all_finite_repr below): an exponent field of all ones carries into bit 63 when one unit of the
-/// exponent is added to it, no other exponent does. Every entry is read (no early exit): for the
-/// few to few hundred entries of its calls that costs less than a branch per entry.
+/// exponent is added to it, no other exponent does. Every entry is read (no early exit), two per
+/// step in GCC's generic vectors: for the few to few hundred entries of its calls that costs less
+/// than a branch per entry.
 inline bool all_finite(const double *v, std::size_t n) {
-    std::uint64_t acc = 0;
-    for (std::size_t i = 0; i < n; ++i) {
+    typedef std::uint64_t U64x2 __attribute__((vector_size(16)));
+    constexpr std::uint64_t kExp = 0x7FF0000000000000ULL;
+    constexpr std::uint64_t kUnit = 0x0010000000000000ULL;
+    const U64x2 exponent = {kExp, kExp};
+    const U64x2 unit = {kUnit, kUnit};
+    U64x2 acc2 = {0, 0};
+    std::size_t i = 0;
+    for (; i + 2 <= n; i += 2) {
+        U64x2 x;
+        std::memcpy(&x, v + i, sizeof x);
+        acc2 |= (x & exponent) + unit;
+    }
+    std::uint64_t acc = acc2[0] | acc2[1];
+    if (i < n) {
         std::uint64_t b = 0;
         std::memcpy(&b, v + i, sizeof b);
-        acc |= (b & 0x7FF0000000000000ULL) + 0x0010000000000000ULL;
+        acc |= (b & kExp) + kUnit;
     }
     return (acc >> 63) == 0;
 }

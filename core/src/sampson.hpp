@@ -12,11 +12,19 @@ namespace sfd {
 
 /// A covariance I + dC (units of sigma^2) is usable: finite and positive definite.
 inline bool noise_excess_valid(const float *dC) {
+    // The three floats finite (an exponent field of all ones carries into bit 31 when one unit
+    // of the exponent is added), so that 1 + dC and the determinant are finite in double.
+    std::uint32_t acc = 0;
+    for (int k = 0; k < 3; ++k) {
+        std::uint32_t b = 0;
+        std::memcpy(&b, dC + k, sizeof b);
+        acc |= (b & 0x7F800000U) + 0x00800000U;
+    }
+    if ((acc >> 31) != 0U) return false;
     const double xx = 1.0 + static_cast<double>(dC[0]);
     const double xy = static_cast<double>(dC[1]);
     const double yy = 1.0 + static_cast<double>(dC[2]);
-    return std::isfinite(xx) && std::isfinite(xy) && std::isfinite(yy) && xx > 0.0 && yy > 0.0 &&
-           xx * yy - xy * xy > 0.0;
+    return xx > 0.0 && yy > 0.0 && xx * yy - xy * xy > 0.0;
 }
 
 /// Both covariances of a match's pixel noise are usable (noise_excess_valid()).
