@@ -10,26 +10,30 @@
 
 namespace sfd {
 
-/// A covariance I + dC (units of sigma^2) is usable: finite and positive definite.
-inline bool noise_excess_valid(const float *dC) {
-    // The three floats finite (an exponent field of all ones carries into bit 31 when one unit
-    // of the exponent is added), so that 1 + dC and the determinant are finite in double.
-    std::uint32_t acc = 0;
-    for (int k = 0; k < 3; ++k) {
-        std::uint32_t b = 0;
-        std::memcpy(&b, dC + k, sizeof b);
-        acc |= (b & 0x7F800000U) + 0x00800000U;
-    }
-    if ((acc >> 31) != 0U) return false;
+/// I + dC (units of sigma^2) positive definite, for a finite dC (pixel_noise_valid() checks that
+/// first, so that 1 + dC and the determinant are finite in double).
+inline bool noise_excess_pd(const float *dC) {
     const double xx = 1.0 + static_cast<double>(dC[0]);
     const double xy = static_cast<double>(dC[1]);
     const double yy = 1.0 + static_cast<double>(dC[2]);
     return xx > 0.0 && yy > 0.0 && xx * yy - xy * xy > 0.0;
 }
 
-/// Both covariances of a match's pixel noise are usable (noise_excess_valid()).
+/// Both covariances I + dC of a match's pixel noise are usable: the six floats
+/// finite, read as three pairs (a float's exponent field of all ones carries into its top bit,
+/// bit 31 or 63 of the pair, when one unit of the exponent is added; the low half cannot carry
+/// into the high one), then each positive definite.
 inline bool pixel_noise_valid(const sfd_pixel_noise_t &n) {
-    return noise_excess_valid(n.prev_dC) && noise_excess_valid(n.curr_dC);
+    static_assert(sizeof n == 6 * sizeof(float), "sfd_pixel_noise_t is six floats");
+    const unsigned char *bytes = reinterpret_cast<const unsigned char *>(&n);
+    std::uint64_t acc = 0;
+    for (std::size_t k = 0; k < 3; ++k) {
+        std::uint64_t b = 0;
+        std::memcpy(&b, bytes + sizeof b * k, sizeof b);
+        acc |= (b & 0x7F8000007F800000ULL) + 0x0080000000800000ULL;
+    }
+    if ((acc & 0x8000000080000000ULL) != 0U) return false;
+    return noise_excess_pd(n.prev_dC) && noise_excess_pd(n.curr_dC);
 }
 
 /// The quadratic form r^T (I + D)^-1 r of a 2-vector for a symmetric 2x2 D = (d00, d01, d11)

@@ -337,8 +337,10 @@ static void oprf_falls_back_to_rotation_only_without_translation(void **state) {
     assert_true(precision(&c) >= 0.95 && recall(&c) >= 0.95);
 }
 
-/* GIVEN a match whose landmark is behind the camera and one with a NaN pixel WHEN running THEN
- * both are UNTESTED and the others are judged; bad arguments give status codes. */
+/* GIVEN matches whose landmark is behind the camera or missing, with a NaN pixel, a landmark
+ * covariance not finite, or a pixel noise excess dC not finite or with I + dC not positive
+ * definite WHEN running THEN those are UNTESTED and the others (one with a valid anisotropic
+ * excess) are judged; bad arguments give status codes. */
 static void invalid_matches_are_untested_and_bad_arguments_rejected(void **state) {
     (void)state;
     SFD_REQ("SFD-OPRF-008");
@@ -356,16 +358,21 @@ static void invalid_matches_are_untested_and_bad_arguments_rejected(void **state
     pair.m[2].landmark_W_m = NULL; /* no landmark: unusable, as one behind the camera */
     pair.m[3].landmark_cov_m2 = NULL;
     pair.landmark_cov_m2[4][8] = NAN; /* a landmark covariance not finite */
+    /* pixel noise excess: not finite in either frame, or I + dC not positive definite */
+    pair.m[5].noise.prev_dC[1] = NAN;
+    pair.m[6].noise.curr_dC[2] = INFINITY;
+    pair.m[7].noise.prev_dC[0] = -1.5F;                             /* xx = -0.5 */
+    pair.m[8].noise.curr_dC[0] = pair.m[8].noise.curr_dC[2] = 1.0F; /* det = 4 - 9 < 0 */
+    pair.m[8].noise.curr_dC[1] = 3.0F;
+    pair.m[9].noise.prev_dC[0] = pair.m[9].noise.curr_dC[2] = 0.5F; /* a valid excess */
+    pair.m[9].noise.prev_dC[1] = -0.25F;
     assert_status(sfd_assoc_run(&assoc, &g_aw, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
                                 pair.prev_p_C, pair.m, pair.n, &res),
                   SFD_OK);
-    assert_int_equal(res.status[0], SFD_VERDICT_UNTESTED);
-    assert_int_equal(res.status[1], SFD_VERDICT_UNTESTED);
-    assert_int_equal(res.status[2], SFD_VERDICT_UNTESTED);
-    assert_int_equal(res.status[3], SFD_VERDICT_UNTESTED);
-    assert_int_equal(res.status[4], SFD_VERDICT_UNTESTED);
-    assert_int_equal(res.num_untested, 5);
-    assert_int_equal(res.num_consistent + res.num_spurious, pair.n - 5);
+    for (int i = 0; i < 9; ++i) assert_int_equal(res.status[i], SFD_VERDICT_UNTESTED);
+    assert_int_not_equal(res.status[9], SFD_VERDICT_UNTESTED);
+    assert_int_equal(res.num_untested, 9);
+    assert_int_equal(res.num_consistent + res.num_spurious, pair.n - 9);
     assert_status(sfd_assoc_run(&assoc, &g_aw, &pair.ekf, &pair.cam, pair.prev_R_CtoW,
                                 pair.prev_p_C, pair.m, SFD_MAX_FEATURES + 1, &res),
                   SFD_ERR_INVAL);
