@@ -68,7 +68,8 @@ COLUMNS += [(k, "detection." + k) for k in
              "untested_clean", "precision", "recall", "f1", "false_alarm_rate", "coverage",
              "recall_tested", "false_alarm_rate_tested")]
 COLUMNS += [("%s_%s" % (k, f), "detection.by_kind.%s.%s" % (k, f))
-            for k in KINDS for f in ("spurious", "detected", "untested", "recall")]
+            for k in KINDS for f in ("spurious", "detected", "untested", "recall", "events",
+                                     "caught_1", "caught_3", "caught_5", "caught_10")]
 COLUMNS += [("traj_frames", "trajectory.frames")]
 COLUMNS += [(k, "trajectory." + k) for k in ("distance_m", "rmse_raw_m", "ate_m", "align_yaw_rad",
                                               "final_error_m", "drift_percent")]
@@ -340,6 +341,14 @@ def summary_md(a, rows, ref, grid, skipped, gens, wall):
                 x = [r for r in r0 if r["method"] == m]
                 md.append("| %s | %s |" % (m, " | ".join(
                     cell(x, "%s_recall" % k, "%.3f").split(" [")[0] for k in kinds)))
+            md += ["", "Fault events caught within 10 frames (a track's run of one fault kind; "
+                   "caught when one of its own observations within 10 frames of its first is "
+                   "judged SPURIOUS; mean ± sd over seeds):", "",
+                   "| method | " + " | ".join(kinds) + " |", "|" + " --- |" * (len(kinds) + 1)]
+            for m in a.methods:
+                x = [r for r in r0 if r["method"] == m]
+                md.append("| %s | %s |" % (m, " | ".join(
+                    cell(x, "%s_caught_10" % k, "%.3f").split(" [")[0] for k in kinds)))
         if len(grid.get("alpha", [])) > 1:
             other = {k: v for k, v in ref.items() if k != "alpha"}
             md += ["", "Precision / strict recall pooled over seeds, per α:", "",

@@ -83,6 +83,58 @@ void DetectionCounts::add_frame(const std::vector<int64_t> &truth_ids,
     }
 }
 
+namespace {
+
+// A TRUTH kind as the scores count it: kClean, or a spurious kind (out of range: kUnspecified).
+int spurious_kind(int kind) {
+    if (kind == kClean) return kClean;
+    return (kind < kJump || kind >= kNumKinds) ? int(kUnspecified) : kind;
+}
+
+}  // namespace
+
+void FaultEvents::add_frame(const std::vector<int64_t> &truth_ids,
+                            const std::vector<int8_t> &truth_kinds,
+                            const std::vector<int64_t> &verdict_ids,
+                            const std::vector<int8_t> &verdict_status) {
+    std::unordered_map<int64_t, int8_t> status;
+    status.reserve(verdict_ids.size());
+    for (size_t i = 0; i < verdict_ids.size() && i < verdict_status.size(); ++i) {
+        status.emplace(verdict_ids[i], verdict_status[i]);  // the first entry of an id
+    }
+    for (size_t i = 0; i < truth_ids.size() && i < truth_kinds.size(); ++i) {
+        const int kind = spurious_kind(truth_kinds[i]);
+        if (kind == kClean) {
+            runs_.erase(truth_ids[i]);
+            continue;
+        }
+        Run &r = runs_[truth_ids[i]];
+        if (r.kind != kind || r.last != frame_ - 1) {  // a new event
+            r = Run{};
+            r.kind = kind;
+            r.first = frame_;
+            ++events[kind];
+        }
+        r.last = frame_;
+        const auto it = status.find(truth_ids[i]);
+        if (!r.caught && it != status.end() && it->second == kSpurious) {
+            r.caught = true;
+            const long latency = frame_ - r.first;
+            for (int w = 0; w < kWindows; ++w) {
+                if (latency < kCatchWindows[w]) ++caught[kind][w];
+            }
+        }
+    }
+    ++frame_;
+}
+
+double FaultEvents::fraction(int kind, int w) const {
+    if (kind < 0 || kind >= kNumKinds || w < 0 || w >= kWindows || events[kind] == 0) {
+        return kUndefined;
+    }
+    return double(caught[kind][w]) / double(events[kind]);
+}
+
 DetectionCounts &DetectionCounts::operator+=(const DetectionCounts &o) {
     tp += o.tp;
     fp += o.fp;

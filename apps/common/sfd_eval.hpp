@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <unordered_map>
 #include <vector>
 
 namespace sfdeval {
@@ -81,6 +82,35 @@ struct DetectionCounts {
     long spurious() const { return tp + fn + untested_spurious; }
     long clean() const { return fp + tn + untested_clean; }
     long labelled() const { return spurious() + clean(); }
+};
+
+/// Fault events and how soon each is caught. An event is a maximal run of one track's
+/// observations labelled with one spurious kind in consecutive frames (the frames TRUTH lists, in
+/// time order; a frame without the track, or with another label, ends it). It is caught within W
+/// frames when one of its own observations at most W - 1 frames after its first is judged
+/// SPURIOUS (a verdict on a frame its label no longer covers does not count; UNTESTED is not a
+/// catch). W takes the values of kCatchWindows.
+struct FaultEvents {
+    static constexpr int kWindows = 4;
+    static constexpr int kCatchWindows[kWindows] = {1, 3, 5, 10};
+    long events[kNumKinds] = {};            // events per kind
+    long caught[kNumKinds][kWindows] = {};  // of those, caught within kCatchWindows[w] frames
+
+    /// The labelled observations of the next frame, as DetectionCounts::add_frame() takes them.
+    void add_frame(const std::vector<int64_t> &truth_ids, const std::vector<int8_t> &truth_kinds,
+                   const std::vector<int64_t> &verdict_ids,
+                   const std::vector<int8_t> &verdict_status);
+    /// caught[kind][w] / events[kind]; kUndefined without events.
+    double fraction(int kind, int w) const;
+
+  private:
+    struct Run {
+        int kind = kClean;
+        long first = 0, last = -2;  // frame indices of its first and latest observation
+        bool caught = false;
+    };
+    std::unordered_map<int64_t, Run> runs_;
+    long frame_ = 0;
 };
 
 /// Scores of one set of counts (kUndefined where the denominator is empty):

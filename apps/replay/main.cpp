@@ -120,7 +120,7 @@ json spread_json(const sfdeval::Spread &s) {
                 {"mean", number(s.mean)}};
 }
 
-json detection_json(const sfdeval::DetectionCounts &c) {
+json detection_json(const sfdeval::DetectionCounts &c, const sfdeval::FaultEvents &ev) {
     const sfdeval::DetectionScores s = sfdeval::score(c);
     json j{{"labelled", c.labelled()},
            {"spurious", c.spurious()},
@@ -140,10 +140,17 @@ json detection_json(const sfdeval::DetectionCounts &c) {
            {"false_alarm_rate_tested", number(s.false_alarm_rate_tested)}};
     json kinds = json::object();
     for (int k = sfdeval::kJump; k < sfdeval::kNumKinds; ++k) {
-        kinds[sfdeval::kind_name(k)] = json{{"spurious", c.kind_spurious[k]},
-                                            {"detected", c.kind_detected[k]},
-                                            {"untested", c.kind_untested[k]},
-                                            {"recall", number(s.kind_recall[k])}};
+        json entry{{"spurious", c.kind_spurious[k]},
+                   {"detected", c.kind_detected[k]},
+                   {"untested", c.kind_untested[k]},
+                   {"recall", number(s.kind_recall[k])},
+                   {"events", ev.events[k]}};
+        // fraction of the kind's events caught within W frames (sfd_eval.hpp FaultEvents)
+        for (int w = 0; w < sfdeval::FaultEvents::kWindows; ++w) {
+            entry["caught_" + std::to_string(sfdeval::FaultEvents::kCatchWindows[w])] =
+                number(ev.fraction(k, w));
+        }
+        kinds[sfdeval::kind_name(k)] = entry;
     }
     j["by_kind"] = kinds;
     return j;
@@ -453,13 +460,16 @@ int run(int argc, char **argv) {
     // verdict; a spurious one left UNTESTED or without a verdict is a miss. TRUTH of real data
     // (sfd-euroc) carries poses and no features: then nothing is scored (null, not zeros).
     sfdeval::DetectionCounts counts;
+    sfdeval::FaultEvents fault_events;  // how soon each fault event is caught
     static const std::vector<int64_t> no_ids;
     static const std::vector<int8_t> no_status;
-    for (const auto &kv : truth) {
+    for (const auto &kv : truth) {  // frames in time order
         const auto v = g_app.verdicts.find(kv.first);
         const bool judged = v != g_app.verdicts.end();
         counts.add_frame(kv.second.ids, kv.second.kinds, judged ? v->second.ids : no_ids,
                          judged ? v->second.status : no_status);
+        fault_events.add_frame(kv.second.ids, kv.second.kinds, judged ? v->second.ids : no_ids,
+                               judged ? v->second.status : no_status);
     }
     const sfdeval::DetectionScores sc = sfdeval::score(counts);
     // Trajectory: SFD_STATE against TRUTH at the same frame times.
@@ -514,6 +524,13 @@ int run(int argc, char **argv) {
                         sc.kind_recall[k], counts.kind_detected[k], counts.kind_spurious[k],
                         counts.kind_untested[k]);
         }
+        static_assert(sfdeval::FaultEvents::kCatchWindows[3] == 10, "window 3 is 10 frames");
+        std::printf("\n    events caught within 10 frames:");
+        for (int k = sfdeval::kJump; k < sfdeval::kNumKinds; ++k) {
+            if (fault_events.events[k] == 0) continue;
+            std::printf(" %s %.3f (%ld/%ld)", sfdeval::kind_name(k), fault_events.fraction(k, 3),
+                        fault_events.caught[k][3], fault_events.events[k]);
+        }
         std::printf("\n");
     }
     if (te.frames > 0) {
@@ -556,7 +573,8 @@ int run(int argc, char **argv) {
         j["judged"] = json{{"tested", judged_tested}, {"spurious", judged_spurious}};
         j["truth"] =
             json{{"frames", static_cast<long long>(truth.size())}, {"undecodable", truth_bad}};
-        j["detection"] = counts.labelled() > 0 ? detection_json(counts) : json(nullptr);
+        j["detection"] =
+            counts.labelled() > 0 ? detection_json(counts, fault_events) : json(nullptr);
         j["trajectory"] = te.frames > 0 ? trajectory_json(te) : json(nullptr);
         if (const int rc = write_text(outs.summary,
                                       j.dump(2, ' ', false, json::error_handler_t::replace) + "\n",

@@ -85,11 +85,20 @@ assert close(d["precision"], 3 / 5) and close(d["f1"], 6 / (6 + 2 + 1 + 5)), d
 assert close(d["false_alarm_rate"], 2 / 7) and close(d["false_alarm_rate_tested"], 2 / 6), d
 assert close(d["coverage"], 10 / 16), d
 k = d["by_kind"]
-assert k["jump"] == {"spurious": 2, "detected": 1, "untested": 1, "recall": 0.5}, k["jump"]
-assert k["moving"] == {"spurious": 2, "detected": 1, "untested": 1, "recall": 0.5}, k["moving"]
-assert k["drift"] == {"spurious": 3, "detected": 0, "untested": 2, "recall": 0.0}, k["drift"]
-assert k["mismatch"] == {"spurious": 2, "detected": 1, "untested": 1, "recall": 0.5}, k
+# Fault events (one per track here): jump 1 caught in its first frame (f0), moving 4 in its
+# second (f1), drift 5 never, mismatch 6 in its second (f3).
+caught = lambda c1, c3: {"events": 1, "caught_1": c1, "caught_3": c3, "caught_5": c3,
+                         "caught_10": c3}
+assert k["jump"] == {"spurious": 2, "detected": 1, "untested": 1, "recall": 0.5,
+                     **caught(1.0, 1.0)}, k["jump"]
+assert k["moving"] == {"spurious": 2, "detected": 1, "untested": 1, "recall": 0.5,
+                       **caught(0.0, 1.0)}, k["moving"]
+assert k["drift"] == {"spurious": 3, "detected": 0, "untested": 2, "recall": 0.0,
+                      **caught(0.0, 0.0)}, k["drift"]
+assert k["mismatch"] == {"spurious": 2, "detected": 1, "untested": 1, "recall": 0.5,
+                         **caught(0.0, 1.0)}, k
 assert k["unspecified"]["spurious"] == 0 and k["unspecified"]["recall"] is None, k
+assert k["unspecified"]["events"] == 0 and k["unspecified"]["caught_10"] is None, k
 t = s["trajectory"]
 assert t["frames"] == 4 and t["ate_m"] < 1e-9, t
 assert abs(t["align_yaw_rad"] - 0.9) < 1e-9, t

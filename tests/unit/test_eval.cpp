@@ -147,6 +147,49 @@ void frames_match_verdicts_by_track_id(void **) {
     assert_true(std::isnan(e.false_alarm_rate) && std::isnan(e.coverage));
 }
 
+// Fault events (a track's run of one fault kind in consecutive frames) and how soon each is
+// caught: by a SPURIOUS verdict on one of its own observations only (not UNTESTED, not a
+// verdict after its label ends); a gap in the track's frames or a change of kind starts a new
+// event; a catch counts in every window longer than its latency.
+void fault_events_count_runs_and_their_latency(void **) {
+    using namespace sfdeval;
+    FaultEvents ev;
+    // frame 0..11; track 1: drift in 0..4, caught at 2; track 2: drift in 0..1, gone in 2, drift
+    // again in 3..4 (two events, neither caught: UNTESTED at 1, SPURIOUS only at 5 when clean);
+    // track 3: jump at 0, then drift from 1 (two events; the drift caught at 1 + 0); track 4:
+    // moving in 0..11, first caught at 11 (latency 11: in no window).
+    for (int f = 0; f < 12; ++f) {
+        std::vector<int64_t> ids;
+        std::vector<int8_t> kinds;
+        std::vector<int64_t> vids;
+        std::vector<int8_t> vst;
+        auto add = [&](int64_t id, int kind, int status) {
+            ids.push_back(id);
+            kinds.push_back(int8_t(kind));
+            vids.push_back(id);
+            vst.push_back(int8_t(status));
+        };
+        add(1, f <= 4 ? kDrift : kClean, f == 2 ? kSpurious : kConsistent);
+        if (f != 2)
+            add(2, f <= 4 ? kDrift : kClean,
+                f == 1 ? kUntested : (f == 5 ? kSpurious : kConsistent));
+        add(3, f == 0 ? kJump : (f <= 3 ? kDrift : kClean), f == 1 ? kSpurious : kConsistent);
+        add(4, kMoving, f == 11 ? kSpurious : kConsistent);
+        ev.add_frame(ids, kinds, vids, vst);
+    }
+    assert_int_equal(ev.events[kDrift], 4);  // track 1, track 2 twice, track 3
+    assert_int_equal(ev.events[kJump], 1);
+    assert_int_equal(ev.events[kMoving], 1);
+    assert_int_equal(ev.caught[kDrift][0], 1);  // track 3 at latency 0
+    assert_int_equal(ev.caught[kDrift][1], 2);  // and track 1 at latency 2
+    assert_int_equal(ev.caught[kDrift][3], 2);
+    assert_int_equal(ev.caught[kJump][3], 0);
+    assert_int_equal(ev.caught[kMoving][3], 0);  // latency 11 > 10 frames
+    assert_true(std::fabs(ev.fraction(kDrift, 3) - 0.5) < 1e-15);
+    assert_true(std::isnan(ev.fraction(kMismatch, 3)));  // no event: undefined
+    assert_true(std::isnan(ev.fraction(kDrift, 4)));     // no such window
+}
+
 void posyaw_alignment_recovers_known_yaw_and_translation(void **) {
     const std::vector<Pose> truth = curve(300);
     const double cases[][4] = {{0.7, 1.5, -2.0, 0.3}, {-2.9, -10.0, 4.0, -1.0}, {kPi, 0, 0, 0}};
@@ -248,6 +291,7 @@ int main(void) {
         cmocka_unit_test(percentile_is_nearest_rank),
         cmocka_unit_test(strict_recall_counts_untested_spurious_as_misses),
         cmocka_unit_test(frames_match_verdicts_by_track_id),
+        cmocka_unit_test(fault_events_count_runs_and_their_latency),
         cmocka_unit_test(posyaw_alignment_recovers_known_yaw_and_translation),
         cmocka_unit_test(pose_alignment_takes_only_the_yaw),
         cmocka_unit_test(trajectory_errors_of_a_known_drift),
