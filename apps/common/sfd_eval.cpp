@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "sfd/sfd_rotation.h"
 
@@ -68,15 +69,26 @@ void DetectionCounts::add(int kind, int status) {
     }
 }
 
+namespace {
+
+// A frame's verdict status by track id: the first entry of an id.
+std::unordered_map<int64_t, int8_t> status_by_id(const std::vector<int64_t> &verdict_ids,
+                                                 const std::vector<int8_t> &verdict_status) {
+    std::unordered_map<int64_t, int8_t> status;
+    status.reserve(verdict_ids.size());
+    for (size_t i = 0; i < verdict_ids.size() && i < verdict_status.size(); ++i) {
+        status.emplace(verdict_ids[i], verdict_status[i]);
+    }
+    return status;
+}
+
+}  // namespace
+
 void DetectionCounts::add_frame(const std::vector<int64_t> &truth_ids,
                                 const std::vector<int8_t> &truth_kinds,
                                 const std::vector<int64_t> &verdict_ids,
                                 const std::vector<int8_t> &verdict_status) {
-    std::unordered_map<int64_t, int8_t> status;
-    status.reserve(verdict_ids.size());
-    for (size_t i = 0; i < verdict_ids.size() && i < verdict_status.size(); ++i) {
-        status.emplace(verdict_ids[i], verdict_status[i]);  // the first entry of an id
-    }
+    const std::unordered_map<int64_t, int8_t> status = status_by_id(verdict_ids, verdict_status);
     for (size_t i = 0; i < truth_ids.size() && i < truth_kinds.size(); ++i) {
         const auto it = status.find(truth_ids[i]);
         add(truth_kinds[i], it == status.end() ? int(kUntested) : int(it->second));
@@ -97,12 +109,11 @@ void FaultEvents::add_frame(const std::vector<int64_t> &truth_ids,
                             const std::vector<int8_t> &truth_kinds,
                             const std::vector<int64_t> &verdict_ids,
                             const std::vector<int8_t> &verdict_status) {
-    std::unordered_map<int64_t, int8_t> status;
-    status.reserve(verdict_ids.size());
-    for (size_t i = 0; i < verdict_ids.size() && i < verdict_status.size(); ++i) {
-        status.emplace(verdict_ids[i], verdict_status[i]);  // the first entry of an id
-    }
+    const std::unordered_map<int64_t, int8_t> status = status_by_id(verdict_ids, verdict_status);
+    std::unordered_set<int64_t> seen;  // an id TRUTH lists twice in a frame: its first entry
+    seen.reserve(truth_ids.size());
     for (size_t i = 0; i < truth_ids.size() && i < truth_kinds.size(); ++i) {
+        if (!seen.insert(truth_ids[i]).second) continue;
         const int kind = spurious_kind(truth_kinds[i]);
         if (kind == kClean) {
             runs_.erase(truth_ids[i]);

@@ -89,7 +89,8 @@ struct DetectionCounts {
 /// time order; a frame without the track, or with another label, ends it). It is caught within W
 /// frames when one of its own observations at most W - 1 frames after its first is judged
 /// SPURIOUS (a verdict on a frame its label no longer covers does not count; UNTESTED is not a
-/// catch). W takes the values of kCatchWindows.
+/// catch). W takes the values of kCatchWindows. An id TRUTH lists twice in one frame counts once
+/// (its first entry).
 struct FaultEvents {
     static constexpr int kWindows = 4;
     static constexpr int kCatchWindows[kWindows] = {1, 3, 5, 10};

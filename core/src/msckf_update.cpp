@@ -223,9 +223,11 @@ sfd_status_t sfd::msckf_statistic_tail(const sfd_msckf_track_t &t,
     // The rows in reverse order (the last first): the Cholesky factor of the reversed S starts
     // with the factor of the tail's block, and forward substitution's first entries depend on
     // the first rows only, so one factor whitens both systems.
+    // Sb's lower triangle from S's lower triangle (the only half the callers must fill): entry
+    // (i, j), j <= i, of the reversed S is S(rows-1-i, rows-1-j) = S(rows-1-j, rows-1-i).
     double Sb[kRows][kRows];
     for (int i = 0; i < rows; ++i) {
-        for (int j = 0; j <= i; ++j) Sb[i][j] = S[rows - 1 - i][rows - 1 - j];
+        for (int j = 0; j <= i; ++j) Sb[i][j] = S[rows - 1 - j][rows - 1 - i];
     }
     // S = L L^T; w = L^-1 r; G = L^-1 H_f (column by column).
     double L[kRows][kRows];

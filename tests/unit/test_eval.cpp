@@ -188,6 +188,12 @@ void fault_events_count_runs_and_their_latency(void **) {
     assert_true(std::fabs(ev.fraction(kDrift, 3) - 0.5) < 1e-15);
     assert_true(std::isnan(ev.fraction(kMismatch, 3)));  // no event: undefined
     assert_true(std::isnan(ev.fraction(kDrift, 4)));     // no such window
+    // An id TRUTH lists twice in one frame counts once: one event, its catch kept.
+    FaultEvents dup;
+    dup.add_frame({7, 7}, {kJump, kJump}, {7}, {kSpurious});
+    dup.add_frame({7, 7}, {kJump, kClean}, {7}, {kConsistent});
+    assert_int_equal(dup.events[kJump], 1);
+    assert_int_equal(dup.caught[kJump][0], 1);
 }
 
 void posyaw_alignment_recovers_known_yaw_and_translation(void **) {

@@ -164,6 +164,16 @@ static void gate_equals_the_landmark_eliminated_statistic(void **state) {
         assert_memory_equal(&g_copy, &g_before, sizeof g_copy); /* the track is only read */
         assert_int_equal(dof_gls, rows - 3);
         assert_true(fabs(gamma_gls - ref) <= 1e-9 * (1.0 + fabs(ref)));
+        /* Only S's lower triangle is read: the upper one poisoned, the same statistic. */
+        for (int i = 0; i < rows; ++i) {
+            for (int j = i + 1; j < rows; ++j) g_copy.R[i][j] = NAN;
+        }
+        double gamma_lower = -1.0;
+        int32_t dof_lower = 0;
+        assert_int_equal(sfd_msckf_track_statistic(&g_copy, (const double(*)[TR])g_copy.R,
+                                                   &gamma_lower, &dof_lower),
+                         SFD_OK);
+        assert_true(gamma_lower == gamma_gls && dof_lower == dof_gls);
     }
 }
 
