@@ -21,6 +21,9 @@ extern "C" sfd_status_t sfd_params_default(sfd_params_t *p) {
     p->seed = 1U;
     p->pixel_noise_adapt = 1;
     p->evidence_frames = SFD_MAX_WINDOW;
+    // With the filter's translation, OPRF finds few spurious features that parity has passed
+    // (docs/evaluation.md "Method both: the false-alarm split"), so most of alpha goes to parity.
+    p->both_parity_share = 0.9;
     return SFD_OK;
 }
 
@@ -46,5 +49,6 @@ extern "C" sfd_status_t sfd_params_validate(const sfd_params_t *p) {
     if (p->max_imu_gap_us <= 0) return SFD_ERR_INVAL;
     if (p->pixel_noise_adapt != 0 && p->pixel_noise_adapt != 1) return SFD_ERR_INVAL;
     if (p->evidence_frames < 0 || p->evidence_frames > SFD_MAX_WINDOW) return SFD_ERR_INVAL;
+    if (!(p->both_parity_share > 0.0 && p->both_parity_share < 1.0)) return SFD_ERR_INVAL;
     return SFD_OK;
 }

@@ -69,9 +69,14 @@ sfd_status_t sfd_pipeline_init(sfd_pipeline_t *p, const sfd_pipeline_config_t *c
                              m == SFD_METHOD_RANSACF || m == SFD_METHOD_BOTH;
     if (needs_filter && !cfg->nav.enabled) return SFD_ERR_INVAL;
     if (sfd_time_guard_params_validate(&cfg->time) != SFD_OK) return SFD_ERR_INVAL;
+    /* method both: parity at share * alpha, then OPRF on its survivors at (1 - share) * alpha */
     p->stage_params = cfg->params;
-    if (m == SFD_METHOD_BOTH) p->stage_params.false_alarm_rate *= 0.5;
-    if (sfd_nav_init(&p->nav, &cfg->nav, &p->stage_params) != SFD_OK) return SFD_ERR_INVAL;
+    sfd_params_t oprf_params = cfg->params;
+    if (m == SFD_METHOD_BOTH) {
+        p->stage_params.false_alarm_rate *= cfg->params.both_parity_share;
+        oprf_params.false_alarm_rate *= 1.0 - cfg->params.both_parity_share;
+    }
+    if (sfd_nav_init(&p->nav, &cfg->nav, &oprf_params) != SFD_OK) return SFD_ERR_INVAL;
     (void)sfd_time_guard_init(&p->imu_time, &cfg->time); /* validated above */
     (void)sfd_time_guard_init(&p->frame_time, &cfg->time);
     p->cfg = *cfg;

@@ -62,6 +62,9 @@ static void params_out_of_range_rejected(void **state) {
     EXPECT_FIELD(ransac_confidence, 1.0, SFD_ERR_INVAL);
     EXPECT_FIELD(gyro_bias_rad_s[1], NAN, SFD_ERR_INVAL);
     EXPECT_FIELD(max_imu_gap_us, 0, SFD_ERR_INVAL);
+    EXPECT_FIELD(both_parity_share, 0.0, SFD_ERR_INVAL);
+    EXPECT_FIELD(both_parity_share, 1.0, SFD_ERR_INVAL);
+    EXPECT_FIELD(both_parity_share, NAN, SFD_ERR_INVAL);
 }
 
 /* GIVEN boundary values THEN they are accepted. */

@@ -10,6 +10,7 @@
 #include <math.h>
 #include <string.h>
 
+#include <sfd/sfd_chi2.h>
 #include <sfd/sfd_pipeline.h>
 #include <sfd/sfd_prng.h>
 
@@ -553,9 +554,41 @@ static void init_refuses_invalid_configurations(void **state) {
     config(&cfg);
     cfg.time.resync_messages = 1;
     assert_status(sfd_pipeline_init(&g_p, &cfg), SFD_ERR_INVAL);
+    const double shares[3] = {0.0, 1.0, NAN};
+    for (int k = 0; k < 3; ++k) {
+        config(&cfg);
+        cfg.params.method = SFD_METHOD_BOTH;
+        cfg.params.both_parity_share = shares[k];
+        assert_status(sfd_pipeline_init(&g_p, &cfg), SFD_ERR_INVAL);
+    }
     assert_int_equal(sfd_pipeline_frames_due(NULL), 0);
     assert_null(sfd_pipeline_output(NULL));
     assert_status(sfd_pipeline_judge(NULL), SFD_ERR_INVAL);
+}
+
+/* GIVEN method both, alpha 0.02 and both_parity_share 0.75 THEN the parity stage tests at
+ * 0.015 and OPRF, which judges parity's survivors, at 0.005 (thresholds chi2(1 - 0.005)): the
+ * two add up to alpha; the other methods keep alpha whole. */
+static void method_both_splits_alpha_between_its_stages(void **state) {
+    (void)state;
+    sfd_pipeline_config_t cfg;
+    config(&cfg);
+    assert_true(cfg.params.both_parity_share > 0.5 && cfg.params.both_parity_share < 1.0);
+    cfg.params.method = SFD_METHOD_BOTH;
+    cfg.params.false_alarm_rate = 0.02;
+    cfg.params.both_parity_share = 0.75;
+    assert_status(sfd_pipeline_init(&g_p, &cfg), SFD_OK);
+    assert_true(fabs(g_p.stage_params.false_alarm_rate - 0.015) <= 1e-15);
+    assert_true(fabs(g_p.nav.params.false_alarm_rate - 0.005) <= 1e-15);
+    double chi2_1 = 0.0;
+    assert_status(sfd_chi2_quantile_upper(0.005, 1, &chi2_1), SFD_OK);
+    assert_true(g_p.nav.assoc.chi2_1 == chi2_1);
+    cfg.params.method = SFD_METHOD_OPRF;
+    assert_status(sfd_pipeline_init(&g_p, &cfg), SFD_OK);
+    assert_true(g_p.stage_params.false_alarm_rate == 0.02);
+    assert_true(g_p.nav.params.false_alarm_rate == 0.02);
+    assert_status(sfd_chi2_quantile_upper(0.02, 1, &chi2_1), SFD_OK);
+    assert_true(g_p.nav.assoc.chi2_1 == chi2_1);
 }
 
 /* One run of the hovering scene with pixel_sigma_px 1 px (the scene has 0.5 px) and tracks
@@ -663,6 +696,7 @@ int main(void) {
         cmocka_unit_test(stages_keep_their_order_and_slots_are_bounded),
         cmocka_unit_test(judge_equals_the_three_stages_bit_for_bit),
         cmocka_unit_test(init_refuses_invalid_configurations),
+        cmocka_unit_test(method_both_splits_alpha_between_its_stages),
         cmocka_unit_test(a_future_stamped_message_is_refused_and_never_the_reference),
         cmocka_unit_test(a_restarted_publisher_is_followed_after_n_messages),
         cmocka_unit_test(a_known_map_and_start_localize_from_the_first_frame),

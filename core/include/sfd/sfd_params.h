@@ -56,6 +56,10 @@ typedef struct {
                                     life, core/docs/parity_space.md "Evidence over a track's
                                     life"); each test then at alpha / 2. 0 or <= window_frames:
                                     off; at most SFD_MAX_WINDOW */
+    double both_parity_share;  /**< method both: the share of false_alarm_rate its parity stage
+                                    gets; OPRF, which then judges parity's survivors, gets the
+                                    rest, so a clean feature is flagged with probability at most
+                                    false_alarm_rate (a weighted Bonferroni split); (0, 1) */
 } sfd_params_t;
 
 /** @brief Fills @p p with the defaults: method PARITY, 1 px, alpha 0.01, L = 3, n = 3, unknown

@@ -98,10 +98,10 @@ typedef enum {
 
 typedef struct {
     sfd_pipeline_config_t cfg;
-    sfd_params_t stage_params; /**< the detectors' parameters: cfg.params, with method both the
-                                    false-alarm rate halved for each of its two stages (parity,
-                                    then OPRF), so that a clean feature is flagged with
-                                    probability at most alpha */
+    sfd_params_t stage_params; /**< the parity detector's parameters: cfg.params, with method
+                                    both the false-alarm rate times both_parity_share (OPRF, in
+                                    nav, gets the rest of it), so that a clean feature is
+                                    flagged with probability at most alpha */
     sfd_pipeline_counters_t counters;
     sfd_parity_t parity;
     sfd_nav_t nav;
