@@ -30,7 +30,8 @@
 //    faults, in which every frame round(random_fraction * n) of the features, drawn at random,
 //    are replaced by pixels uniform over the image (keeping their track ids; KIND_MISMATCH). At
 //    random_fraction = 1 every match is an outlier: RANSAC-type methods exhaust their hypothesis
-//    budget and every parity group fails.
+//    budget and every parity group fails. A random pixel is a one-frame mismatch and labelled as
+//    one: spurious in its frame and the W frames after it (the windows that contain it).
 // Label windows: a step (jump, each drift step, each of a mismatch's two steps: away and back
 // the next frame) labels the track spurious in the truth_window = W frames starting at the step,
 // with the kind of its last step: for a detector window of L = W + 1 frames, exactly the frames
@@ -45,6 +46,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <unordered_map>
 #include <vector>
 
 #include "lcm_log.hpp"
@@ -433,6 +435,8 @@ int generate_flight(const FlightOptions &opt, FlightSink &sink, FlightStats *sta
     std::vector<Obs> obs;
     obs.reserve(SFD_FEATURE_FRAME_T_CAPACITY);
     std::vector<int> order;  // worst-case: the features replaced this frame
+    // worst-case: track id -> the last frame it was a random pixel (its label window)
+    std::unordered_map<int64_t, int> last_random;
     int64_t imu_index = 0;
     for (int f = 0; f < opt.frames; ++f) {
         const double t_frame = f * dt_cam;
@@ -639,8 +643,18 @@ int generate_flight(const FlightOptions &opt, FlightSink &sink, FlightStats *sta
                 ff.v[m] = cam.height_px * sfd_prng_uniform(&rng);
                 tr.spurious[m] = 1;
                 tr.kind[m] = SFD_TRUTH_T_KIND_MISMATCH;
+                last_random[ff.track_id[m]] = f;
             }
             st.events[SFD_TRUTH_T_KIND_MISMATCH] += n_random;
+            // back on its point after a random pixel: a mismatch's return step, labelled for
+            // the W frames from it, as in mistracking (the windows that still hold the pixel)
+            for (int i = 0; i < k; ++i) {
+                const auto it = last_random.find(ff.track_id[i]);
+                if (it != last_random.end() && it->second < f && f - it->second <= W) {
+                    tr.spurious[i] = 1;
+                    tr.kind[i] = SFD_TRUTH_T_KIND_MISMATCH;
+                }
+            }
         }
         for (int i = 0; i < k; ++i) {
             st.spurious += tr.spurious[i];
