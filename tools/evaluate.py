@@ -33,7 +33,10 @@ import time
 import sfd_tool_cli  # tools/sfd_tool_cli.py
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-METHODS = ["none", "parity", "oprf", "ransac1", "ransacf", "both"]
+METHODS = ["none", "parity", "oprf", "ransac1", "ransacf", "both", "parity-oracle"]
+# Not a method of the product: parity's test with TRUTH's poses in place of the filter
+# (sfd-replay --oracle-poses), the ceiling of what the test can see; sfd-replay's arguments.
+METHOD_ARGS = {"parity-oracle": ["--method", "parity", "--oracle-poses"]}
 KINDS = ["jump", "drift", "moving", "mismatch", "unspecified"]
 # Scenario -> extra sfd-sim arguments ("{data}" = --data). Edit here (or --sim-args) as sfd-sim's
 # options change. worst-case: 30 % random pixels; at its default 1.0 every observation is spurious
@@ -166,8 +169,9 @@ def plan(a, grid, config):
                 for p in points:
                     tag = "_".join("%s%s" % (k, v) for k, v in p.items())
                     rel = os.path.join("runs", name, "%s_%s.json" % (m, tag))
-                    cmd = [replay, log, "--config", config, "--method", m, "--summary",
-                           os.path.join(a.out, rel)]
+                    cmd = ([replay, log, "--config", config] +
+                           METHOD_ARGS.get(m, ["--method", m]) +
+                           ["--summary", os.path.join(a.out, rel)])
                     for k, v in p.items():
                         cmd += [GRID[k][0], v]
                     key = dict(scenario=sc, seed=seed, method=m, **p)

@@ -17,6 +17,7 @@
 #include <cstring>
 #include <exception>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -31,6 +32,7 @@
 #include "sfd_log_reader.h"
 #include "sfd_node_core.h"
 #include "sfd_output.h"
+#include "sfd_pose_oracle.hpp"
 
 namespace {
 
@@ -234,16 +236,119 @@ bool outputs_distinct(const std::vector<std::pair<const char *, std::string>> &i
     return true;
 }
 
+// --oracle-poses (sfd_pose_oracle.hpp): the camera the node would follow (the configured
+// camera_id, else the first one calibrated; a changed calibration of it starts the oracle
+// again, a republished one keeps it),
+// its frames queued until TRUTH gives their pose, judged in time order; a frame whose TRUTH
+// never comes (TRUTH of a later frame arrived, or the log ended) stays unjudged.
+struct Oracle {
+    static_assert(SFD_VERDICT_UNTESTED == SFD_FEATURE_VERDICT_T_UNTESTED &&
+                      SFD_VERDICT_CONSISTENT == SFD_FEATURE_VERDICT_T_CONSISTENT &&
+                      SFD_VERDICT_SPURIOUS == SFD_FEATURE_VERDICT_T_SPURIOUS,
+                  "core and wire verdict codes");
+    sfdoracle::PoseOracle po;
+    int32_t camera_id = -1;
+    bool have_camera = false;
+    long judged = 0, unjudged = 0, refused = 0, judged_untested = 0;
+    std::vector<std::unique_ptr<sfd_frame_t>> pending;  // oldest first
+    sfd_camera_info_t ci_msg;
+    sfd_feature_frame_t ff_msg;
+    sfd_verdict_t verdict;
+    sfd_camera_t camera;
+    sfd_extrinsics_t extrinsics;
+
+    // bit for bit, field by field (the structs' padding is not part of the value)
+    static bool same_bits(const double *a, const double *b, int n) {
+        for (int k = 0; k < n; ++k) {
+            uint64_t x = 0, y = 0;
+            std::memcpy(&x, &a[k], sizeof x);
+            std::memcpy(&y, &b[k], sizeof y);
+            if (x != y) return false;
+        }
+        return true;
+    }
+    bool same_calibration(const sfd_camera_t &c, const sfd_extrinsics_t &e) const {
+        const double a[8] = {c.fx_px,   c.fy_px,   c.cx_px,   c.cy_px,
+                             c.dist[0], c.dist[1], c.dist[2], c.dist[3]};
+        const double b[8] = {camera.fx_px,   camera.fy_px,   camera.cx_px,   camera.cy_px,
+                             camera.dist[0], camera.dist[1], camera.dist[2], camera.dist[3]};
+        return c.model == camera.model && c.width_px == camera.width_px &&
+               c.height_px == camera.height_px && same_bits(a, b, 8) &&
+               same_bits(e.R_CtoI, extrinsics.R_CtoI, 9) &&
+               same_bits(e.p_CinI, extrinsics.p_CinI, 3);
+    }
+    void camera_info(const sfd_params_t &params, const void *data, int32_t size) {
+        sfd_camera_t cam;
+        sfd_extrinsics_t ext;
+        int32_t id = 0;
+        if (sfd_lcm_decode_camera_info(data, size, &ci_msg, &cam, &ext, &id) != SFD_REJECT_NONE ||
+            ((have_camera || camera_id >= 0) && id != camera_id)) {
+            return;
+        }
+        camera_id = id;
+        // the same calibration again (published periodically) keeps the window, as in the node
+        if (have_camera && same_calibration(cam, ext)) return;
+        camera = cam;
+        extrinsics = ext;
+        have_camera = po.start(params, cam, ext) == SFD_OK;
+    }
+    void features(const void *data, int32_t size) {
+        auto f = std::make_unique<sfd_frame_t>();
+        int32_t id = 0;
+        int fixed = 0;
+        if (!have_camera ||
+            sfd_lcm_decode_features(data, size, &ff_msg, f.get(), &id, &fixed) != SFD_REJECT_NONE ||
+            id != camera_id || (!pending.empty() && f->utime <= pending.back()->utime)) {
+            ++refused;
+            return;
+        }
+        pending.push_back(std::move(f));
+    }
+    void drain(const std::map<int64_t, TruthRecord> &truth, std::vector<double> *frame_us,
+               bool at_end) {
+        size_t k = 0;
+        for (; k < pending.size(); ++k) {
+            const sfd_frame_t &f = *pending[k];
+            const auto it = truth.find(f.utime);
+            if (it == truth.end()) {
+                const bool never = at_end || (!truth.empty() && truth.rbegin()->first > f.utime);
+                if (!never) break;
+                ++unjudged;
+                continue;
+            }
+            const auto t0 = std::chrono::steady_clock::now();
+            if (po.judge(f, it->second.pose.p, it->second.pose.q, &verdict) != SFD_OK) {
+                ++unjudged;
+                continue;
+            }
+            frame_us->push_back(
+                std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0)
+                    .count());
+            ++judged;
+            judged_untested += verdict.num_consistent + verdict.num_spurious == 0;
+            VerdictRecord &r = g_app.verdicts[f.utime];
+            r.ids.resize(size_t(verdict.num_features));
+            r.status.resize(size_t(verdict.num_features));
+            for (int i = 0; i < verdict.num_features; ++i) {
+                r.ids[size_t(i)] = verdict.features[i].track_id;
+                r.status[size_t(i)] = verdict.features[i].status;
+            }
+        }
+        pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(k));
+    }
+};
+
 int run(int argc, char **argv) {
     const char *in_path = nullptr, *out_path = nullptr, *summary_path = nullptr;
     std::string in_arg, out_arg, summary_arg;
-    bool score_only = false, salvage = false;
+    bool score_only = false, salvage = false, oracle_poses = false;
     sfdapp::AppConfig app_cfg;
     // The same parser and configuration flags as sfd-node (apps/common/sfd_app_cli.hpp).
     sfdcli::Parser cli(
         "sfd-replay", "sfd-replay",
         "IN.lcmlog [-o OUT.lcmlog] [--summary S.json] [--config F] [--KEY VALUE ...]\n"
-        "       sfd-replay IN.lcmlog --score-only [--summary S.json] [--config F] [--salvage]",
+        "       sfd-replay IN.lcmlog --score-only [--summary S.json] [--config F] [--salvage]\n"
+        "       sfd-replay IN.lcmlog --oracle-poses [--summary S.json] [--config F] [--KEY VALUE]",
         "  Plays IN through the node's code path as fast as possible. IN must be an LCM log:\n"
         "  the first bad event (no sync word where an event starts, a channel length outside\n"
         "  1..999 or a negative data length, an event running past the end of the file) is\n"
@@ -280,6 +385,13 @@ int run(int argc, char **argv) {
              "already in IN (a recorded sfd-node run, or a previous\n"
              "-o) against its TRUTH",
              [&score_only] { score_only = true; });
+    cli.flag("oracle-poses",
+             "evaluation only: run no node; parity's test with the\n"
+             "filter's translation judges each frame with the TRUE\n"
+             "poses of TRUTH in place of the window filter (method\n"
+             "parity; docs/evaluation.md \"What the test can see\n"
+             "with true poses\"); frames without TRUTH go unjudged",
+             [&oracle_poses] { oracle_poses = true; });
     cli.flag("salvage",
              "skip bad events instead (resynchronizing on the next\n"
              "sync word that starts a good event); the summary\n"
@@ -318,6 +430,19 @@ int run(int argc, char **argv) {
     if (in_path == nullptr) return cli.fail("missing IN.lcmlog (sfd-replay --help)");
     if (score_only && out_path != nullptr) {
         std::fprintf(stderr, "sfd-replay: --score-only writes no OUT (-o)\n");
+        return 2;
+    }
+    if (oracle_poses && (out_path != nullptr || score_only)) {
+        std::fprintf(stderr,
+                     "sfd-replay: --oracle-poses takes no %s (it runs no node and writes no OUT)\n",
+                     score_only ? "--score-only" : "-o");
+        return 2;
+    }
+    if (oracle_poses &&
+        (cfg.params.method != SFD_METHOD_PARITY || cfg.params.translation_known != 1)) {
+        std::fprintf(stderr,
+                     "sfd-replay: --oracle-poses judges with parity's test with the filter's "
+                     "translation: needs method parity and translation_known 1\n");
         return 2;
     }
     // No output may be an input or another output: checked before anything is opened.
@@ -373,6 +498,9 @@ int run(int argc, char **argv) {
     long truth_bad = 0;
     std::vector<double> frame_us;
     int64_t first_ts = 0, last_ts = 0, events = 0, foreign = 0;
+    // --oracle-poses: frames wait for their TRUTH (in time order), then the oracle judges them.
+    static Oracle oracle;  // ~60 KiB of message scratch: static
+    oracle.camera_id = cfg.camera_id;
     const auto wall0 = std::chrono::steady_clock::now();
     sfd_log_event_t event;
     sfd_log_status_t read_status;
@@ -385,7 +513,9 @@ int run(int argc, char **argv) {
         const std::string ch(ev->channel, size_t(ev->channellen));
         if (g_app.out != nullptr) write_event(g_app.out, ch, ev->timestamp, ev->data, ev->datalen);
         if (ch == "TRUTH") {
-            if (!score_only) sfd_node_handle(&g_node, SFD_NODE_TRUTH, ev->data, ev->datalen);
+            if (!score_only && !oracle_poses) {
+                sfd_node_handle(&g_node, SFD_NODE_TRUTH, ev->data, ev->datalen);
+            }
             if (sfd_lcm_decode_truth(ev->data, ev->datalen, &tr, &tr_v1) == SFD_REJECT_NONE) {
                 TruthRecord &r = truth[tr.utime];
                 r.ids.assign(tr.track_id, tr.track_id + tr.num_features);
@@ -396,6 +526,16 @@ int run(int argc, char **argv) {
             } else {
                 ++truth_bad;  // not scored (counted in the summary)
             }
+            if (oracle_poses) oracle.drain(truth, &frame_us, false);
+        } else if (oracle_poses) {
+            if (ch == app_cfg.channels.camera_info) {
+                oracle.camera_info(cfg.params, ev->data, ev->datalen);
+            } else if (ch == app_cfg.channels.features) {
+                oracle.features(ev->data, ev->datalen);
+                oracle.drain(truth, &frame_us, false);
+            }
+            foreign += !(ch == app_cfg.channels.camera_info || ch == app_cfg.channels.features ||
+                         ch == app_cfg.channels.imu);
         } else if (score_only) {  // the recorded outputs; nothing goes to a node
             const bool verdict = ch == g_app.verdict_channel, state = ch == g_app.state_channel;
             if (verdict || state) {
@@ -431,7 +571,11 @@ int run(int argc, char **argv) {
                      in_path, static_cast<long long>(in.bad_events),
                      static_cast<long long>(in.bytes_skipped));
     }
-    if (!score_only) sfd_node_flush(&g_node);
+    if (oracle_poses) {
+        oracle.drain(truth, &frame_us, true);
+    } else if (!score_only) {
+        sfd_node_flush(&g_node);
+    }
     const double wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     if (g_app.out != nullptr) {
@@ -484,13 +628,20 @@ int run(int argc, char **argv) {
     const sfdeval::Spread fs = sfdeval::spread_of(frame_us);
     const double log_s = double(last_ts - first_ts) * 1e-6;
     const double speed = wall_s > 0 ? log_s / wall_s : 0.0;
-    const char *filter_start = score_only                ? "unknown"
+    const char *filter_start = oracle_poses              ? "oracle"
+                               : score_only              ? "unknown"
                                : !cfg.nav.enabled        ? "none"
                                : cfg.nav.init_from_truth ? "truth"
                                                          : "rest";
     const sfd_node_counters_t &c = g_node.pipe.counters;
 
-    if (score_only) {
+    if (oracle_poses) {
+        std::printf(
+            "sfd-replay %s: oracle with TRUTH's poses (parity's test, no filter), %lld events, "
+            "%ld frames judged, %ld without TRUTH, %ld refused, %ld by the fallback\n",
+            in_path, static_cast<long long>(events), oracle.judged, oracle.unjudged, oracle.refused,
+            oracle.po.fallbacks());
+    } else if (score_only) {
         std::printf("sfd-replay %s: scoring the recorded %s and %s, %lld events\n", in_path,
                     g_app.verdict_channel.c_str(), g_app.state_channel.c_str(),
                     static_cast<long long>(events));
@@ -546,7 +697,7 @@ int run(int argc, char **argv) {
                 te.nees_mean, 100.0 * te.nees_in_band_95);
         }
     }
-    if (!score_only) {
+    if (!score_only && !oracle_poses) {
         std::printf(
             "  time per frame: median %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us; %.1fx real "
             "time\n",
@@ -559,16 +710,31 @@ int run(int argc, char **argv) {
         }
         json j;
         j["input"] = in_path;
-        j["method"] = score_only ? std::string("recorded") : method_name;
+        j["method"] = oracle_poses ? std::string("parity-oracle")
+                      : score_only ? std::string("recorded")
+                                   : method_name;
         j["events"] = static_cast<long long>(events);
         j["log"] = json{{"salvage", salvage},
                         {"bad_events", static_cast<long long>(in.bad_events)},
                         {"bytes_skipped", static_cast<long long>(in.bytes_skipped)}};
         j["filter_start"] = filter_start;
-        j["frames"] = json{{"in", static_cast<long long>(c.frames_in)},
-                           {"refused", static_cast<long long>(c.frames_refused)},
-                           {"processed", static_cast<long long>(c.frames_processed)},
-                           {"untested", static_cast<long long>(c.frames_untested)}};
+        if (oracle_poses) {
+            j["oracle"] = json{{"judged", oracle.judged},
+                               {"without_truth", oracle.unjudged},
+                               {"refused", oracle.refused},
+                               {"fallbacks", oracle.po.fallbacks()}};
+        }
+        if (oracle_poses) {
+            j["frames"] = json{{"in", oracle.judged + oracle.unjudged + oracle.refused},
+                               {"refused", oracle.refused + oracle.unjudged},
+                               {"processed", oracle.judged},
+                               {"untested", oracle.judged_untested}};
+        } else {
+            j["frames"] = json{{"in", static_cast<long long>(c.frames_in)},
+                               {"refused", static_cast<long long>(c.frames_refused)},
+                               {"processed", static_cast<long long>(c.frames_processed)},
+                               {"untested", static_cast<long long>(c.frames_untested)}};
+        }
         j["rejected"] = rejected;
         j["judged"] = json{{"tested", judged_tested}, {"spurious", judged_spurious}};
         j["truth"] =

@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# integration.oracle_poses: sfd-replay --oracle-poses (parity's filter-path test with TRUTH's
+# poses in place of the window filter; apps/common/sfd_pose_oracle.hpp):
+#  - on a clean flight (sfd-sim mistracking --outlier-ratio 0, 400 frames) the oracle flags a
+#    clean feature with probability at most alpha (the 99 % binomial interval over a third of the
+#    tests, as integration.clean_false_alarms): a wrong pose convention (a transposed rotation,
+#    the IMU's pose used as the camera's) flags most features;
+#  - on a flight with spurious tracks (200 frames) it judges every frame, never through the
+#    unknown-translation fallback (its window is accepted as the filter's), and scores at least
+#    the product's parity (F1 within 0.02 of it or above: it has the poses exactly);
+#  - bad usage is exit 2: with -o, with --score-only, with a method other than parity.
+# usage: oracle_poses.sh BUILD_DIR SOURCE_DIR
+set -euo pipefail
+build="$1"; src="$2"
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+cfg="$src/apps/config/sfd.yaml"
+replay="$build/apps/sfd-replay"
+
+"$build/apps/sfd-sim" mistracking -o "$tmp/clean.lcmlog" --frames 400 --seed 3 \
+  --outlier-ratio 0 >/dev/null
+"$replay" "$tmp/clean.lcmlog" --config "$cfg" --oracle-poses --summary "$tmp/clean.json" >/dev/null
+"$build/apps/sfd-sim" mistracking -o "$tmp/faults.lcmlog" --frames 200 --seed 1 >/dev/null
+"$replay" "$tmp/faults.lcmlog" --config "$cfg" --oracle-poses --summary "$tmp/oracle.json" \
+  >/dev/null
+"$replay" "$tmp/faults.lcmlog" --config "$cfg" --method parity --summary "$tmp/parity.json" \
+  >/dev/null
+
+python3 - "$tmp" <<'PYEOF'
+import json, math, sys
+tmp = sys.argv[1]
+clean = json.load(open(tmp + "/clean.json"))
+d = clean["detection"]
+alpha = 0.01
+tested = d["fp"] + d["tn"]
+rate = d["fp"] / tested
+half = 2.576 * math.sqrt(alpha * (1 - alpha) / (tested / 3))
+print(f"clean flight: oracle flags {d['fp']} of {tested} clean tests, rate {rate:.4f} "
+      f"(at most {alpha + half:.4f})")
+assert clean["method"] == "parity-oracle" and clean["filter_start"] == "oracle", clean
+assert d["spurious"] == 0 and tested > 20000, d
+assert rate <= alpha + half, rate
+o = json.load(open(tmp + "/oracle.json"))
+p = json.load(open(tmp + "/parity.json"))
+print(f"faults: oracle F1 {o['detection']['f1']:.4f} (recall {o['detection']['recall']:.4f}), "
+      f"product parity F1 {p['detection']['f1']:.4f}; oracle {o['oracle']}")
+assert o["oracle"]["judged"] == 200 and o["oracle"]["fallbacks"] == 0, o["oracle"]
+assert o["oracle"]["without_truth"] == 0 and o["oracle"]["refused"] == 0, o["oracle"]
+assert o["frames"]["processed"] == 200 and o["trajectory"] is None, o
+assert o["detection"]["f1"] >= p["detection"]["f1"] - 0.02, (o["detection"], p["detection"])
+PYEOF
+
+expect_2() { # DESCRIPTION ARGS...
+  local what="$1"; shift
+  local rc=0
+  "$replay" "$tmp/faults.lcmlog" --config "$cfg" "$@" >"$tmp/out.txt" 2>"$tmp/err.txt" || rc=$?
+  [ "$rc" -eq 2 ] || { echo "$what: exit $rc, want 2" >&2; cat "$tmp/err.txt" >&2; exit 1; }
+  [ "$(wc -l <"$tmp/err.txt")" -eq 1 ] || { echo "$what: not one line" >&2; exit 1; }
+  echo "$what: exit 2: $(cat "$tmp/err.txt")"
+}
+expect_2 "with -o" --oracle-poses -o "$tmp/o.lcmlog"
+expect_2 "with --score-only" --oracle-poses --score-only
+expect_2 "with method both" --oracle-poses --method both
+expect_2 "with translation_known 0" --oracle-poses --translation-known 0
+[ ! -e "$tmp/o.lcmlog" ] || { echo "-o written" >&2; exit 1; }
+echo "oracle_poses: ok"
