@@ -9,10 +9,12 @@
 #  - on a flight with spurious tracks (200 frames) it judges every frame, never through the
 #    unknown-translation fallback (its window is accepted as the filter's), and scores at least
 #    the product's parity (F1 within 0.02 of it or above: it has the poses exactly);
-#  - bad usage is exit 2: with -o, with --score-only, with a method other than parity.
-# usage: oracle_poses.sh BUILD_DIR SOURCE_DIR
+#  - bad usage is exit 2: with -o, with --score-only, with a method other than parity;
+#  - tools/strip_spurious.py (the input a perfect detector leaves the filter) removes exactly the
+#    labelled features: replayed, none of them gets a verdict and every clean one is judged.
+# usage: oracle_poses.sh BUILD_DIR SOURCE_DIR PYTHON PYTHONPATH_FOR_TYPES
 set -euo pipefail
-build="$1"; src="$2"
+build="$1"; src="$2"; py="$3"; pytypes="$4"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 cfg="$src/apps/config/sfd.yaml"
@@ -64,4 +66,20 @@ expect_2 "with --score-only" --oracle-poses --score-only
 expect_2 "with method both" --oracle-poses --method both
 expect_2 "with translation_known 0" --oracle-poses --translation-known 0
 [ ! -e "$tmp/o.lcmlog" ] || { echo "-o written" >&2; exit 1; }
+
+PYTHONPATH="$pytypes" "$py" "$src/tools/strip_spurious.py" "$tmp/faults.lcmlog" \
+  "$tmp/stripped.lcmlog"
+"$replay" "$tmp/stripped.lcmlog" --config "$cfg" --method none --summary "$tmp/stripped.json" \
+  >/dev/null
+python3 - "$tmp" <<'PYEOF'
+import json, sys
+tmp = sys.argv[1]
+a = json.load(open(tmp + "/parity.json"))["detection"]
+s = json.load(open(tmp + "/stripped.json"))["detection"]
+print(f"stripped: {s['spurious']} labelled spurious, {s['untested_spurious']} without a verdict; "
+      f"clean {s['clean']}, judged {s['tn'] + s['fp']}")
+assert s["spurious"] == a["spurious"] > 0 and s["untested_spurious"] == s["spurious"], s
+# method none judges every feature it gets CONSISTENT: every clean one is still there
+assert s["clean"] == a["clean"] and s["tn"] == s["clean"] and s["untested_clean"] == 0, (s, a)
+PYEOF
 echo "oracle_poses: ok"

@@ -1,0 +1,97 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""Copies an sfd log with every feature TRUTH labels spurious removed from its FEATURES
+messages: the input a perfect detector would leave the filter (evaluation only; it reads TRUTH).
+Replaying the copy (`sfd-replay OUT --method none`) measures the trajectory the window filter
+reaches when no labelled fault reaches it, the floor of issue 16's drift figure
+(docs/evaluation.md "Drift with perfect detection").
+
+Usage: strip_spurious.py IN.lcmlog OUT.lcmlog
+
+Every other event is copied unchanged, in order, with its timestamp. A FEATURES message keeps
+its other features in their order; one whose frame has no TRUTH is copied unchanged. The
+generated Python LCM types are found as `sfd` on PYTHONPATH, else in $SFD_LCM_PYTHON, else in
+build/host/lcm_types/python next to this script. Exit 0; 2 for bad usage or an unreadable log."""
+import argparse
+import os
+import sys
+
+import sfd_tool_cli  # tools/sfd_tool_cli.py
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def fail(msg):
+    """Bad usage or input: one line on stderr, exit 2."""
+    print(f"strip_spurious.py: {msg}", file=sys.stderr)
+    sys.exit(2)
+
+
+def import_types():
+    """lcm and the generated LCM types (package sfd)."""
+    try:
+        import lcm  # noqa: F401
+    except ImportError:
+        fail("the Python module 'lcm' is missing (tools/setup.sh installs it)")
+    try:
+        from sfd import feature_frame_t  # noqa: F401
+    except ImportError:
+        for p in (os.environ.get("SFD_LCM_PYTHON", ""),
+                  os.path.join(ROOT, "build", "host", "lcm_types", "python")):
+            if p and os.path.isdir(os.path.join(p, "sfd")):
+                sys.path.insert(0, p)
+                break
+    try:
+        import lcm
+        from sfd import feature_frame_t, truth_t
+        return lcm, feature_frame_t, truth_t
+    except ImportError:
+        fail("no generated LCM types (package sfd): build the host preset or set SFD_LCM_PYTHON")
+
+
+def main():
+    ap = argparse.ArgumentParser(prog="strip_spurious.py", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    sfd_tool_cli.add_version(ap, "strip_spurious.py")
+    ap.add_argument("input", metavar="IN.lcmlog")
+    ap.add_argument("output", metavar="OUT.lcmlog")
+    a = ap.parse_args()
+    if os.path.abspath(a.input) == os.path.abspath(a.output) or (
+            os.path.exists(a.output) and os.path.samefile(a.input, a.output)):
+        fail(f"OUT {a.output} is IN")
+    lcm, feature_frame_t, truth_t = import_types()
+    try:
+        events = list(lcm.EventLog(a.input, "r"))
+    except (IOError, OSError, ValueError) as e:
+        fail(f"{a.input}: {e}")
+    spurious = {}  # frame time -> labelled spurious track ids
+    for e in events:
+        if e.channel == "TRUTH":
+            t = truth_t.decode(e.data)
+            spurious[t.utime] = {t.track_id[i] for i in range(t.num_features) if t.spurious[i]}
+    removed = kept = 0
+    out = lcm.EventLog(a.output, "w", overwrite=True)
+    for e in events:
+        data = e.data
+        if e.channel == "FEATURES":
+            f = feature_frame_t.decode(e.data)
+            bad = spurious.get(f.utime, set())
+            keep = [i for i in range(f.num_features) if f.track_id[i] not in bad]
+            removed += f.num_features - len(keep)
+            kept += len(keep)
+            g = feature_frame_t()
+            g.utime, g.camera_id, g.num_features = f.utime, f.camera_id, len(keep)
+            for name in ("track_id", "u", "v", "depth", "depth_var"):
+                src, dst = getattr(f, name), list(getattr(g, name))
+                for j, i in enumerate(keep):
+                    dst[j] = src[i]
+                setattr(g, name, dst)
+            data = g.encode()
+        out.write_event(e.timestamp, e.channel, data)
+    out.close()
+    print(f"strip_spurious.py: {a.output}: {len(events)} events, {kept} features kept, "
+          f"{removed} labelled spurious removed")
+
+
+if __name__ == "__main__":
+    main()
