@@ -7,7 +7,8 @@
 //
 // How the filter is replaced: an sfd_window_t is started once and then, before every frame,
 // written directly (it is plain caller-owned data, sfd/sfd_window.h): its clones are the true
-// IMU poses of the previous frames (as many as SFD_MAX_WINDOW, the most the real filter holds),
+// IMU poses of the previous frames (up to SFD_MAX_WINDOW; the tests read at most the newest
+// evidence_frames - 1 of them, as with the real filter),
 // its current IMU state the true pose of the frame being judged, no propagation pending, and
 // its covariance kPoseVariance on the diagonal (poses known to 1 um and 1 urad: Cov(z) is the
 // pixel noise alone, and the matrix stays positive definite). The frame motion handed to the

@@ -238,7 +238,7 @@ bool outputs_distinct(const std::vector<std::pair<const char *, std::string>> &i
 
 // --oracle-poses (sfd_pose_oracle.hpp): the camera the node would follow (the configured
 // camera_id, else the first one calibrated; a changed calibration of it starts the oracle
-// again, a republished one keeps it),
+// again, dropping the frames of the old one that still wait, a republished one keeps it),
 // its frames queued until TRUTH gives their pose, judged in time order; a frame whose TRUTH
 // never comes (TRUTH of a later frame arrived, or the log ended) stays unjudged.
 struct Oracle {
@@ -249,7 +249,8 @@ struct Oracle {
     sfdoracle::PoseOracle po;
     int32_t camera_id = -1;
     bool have_camera = false;
-    long judged = 0, unjudged = 0, refused = 0, judged_untested = 0;
+    long judged = 0, unjudged = 0, refused = 0, failed = 0, judged_untested = 0;
+    static constexpr size_t kMaxPending = 256;          // frames waiting for their TRUTH
     std::vector<std::unique_ptr<sfd_frame_t>> pending;  // oldest first
     sfd_camera_info_t ci_msg;
     sfd_feature_frame_t ff_msg;
@@ -290,6 +291,9 @@ struct Oracle {
         if (have_camera && same_calibration(cam, ext)) return;
         camera = cam;
         extrinsics = ext;
+        // frames of the old calibration still waiting for TRUTH are not judged with the new one
+        refused += static_cast<long>(pending.size());
+        pending.clear();
         have_camera = po.start(params, cam, ext) == SFD_OK;
     }
     void features(const void *data, int32_t size) {
@@ -318,7 +322,7 @@ struct Oracle {
             }
             const auto t0 = std::chrono::steady_clock::now();
             if (po.judge(f, it->second.pose.p, it->second.pose.q, &verdict) != SFD_OK) {
-                ++unjudged;
+                ++failed;  // refused by the detector (a bad pose or frame): not judged
                 continue;
             }
             frame_us->push_back(
@@ -335,6 +339,11 @@ struct Oracle {
             }
         }
         pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(k));
+        // a log without TRUTH for its frames: the oldest give up waiting (bounded memory)
+        while (pending.size() > kMaxPending) {
+            pending.erase(pending.begin());
+            ++unjudged;
+        }
     }
 };
 
@@ -638,9 +647,10 @@ int run(int argc, char **argv) {
     if (oracle_poses) {
         std::printf(
             "sfd-replay %s: oracle with TRUTH's poses (parity's test, no filter), %lld events, "
-            "%ld frames judged, %ld without TRUTH, %ld refused, %ld by the fallback\n",
+            "%ld frames judged, %ld without TRUTH, %ld refused, %ld failed, %ld by the "
+            "fallback\n",
             in_path, static_cast<long long>(events), oracle.judged, oracle.unjudged, oracle.refused,
-            oracle.po.fallbacks());
+            oracle.failed, oracle.po.fallbacks());
     } else if (score_only) {
         std::printf("sfd-replay %s: scoring the recorded %s and %s, %lld events\n", in_path,
                     g_app.verdict_channel.c_str(), g_app.state_channel.c_str(),
@@ -722,13 +732,15 @@ int run(int argc, char **argv) {
             j["oracle"] = json{{"judged", oracle.judged},
                                {"without_truth", oracle.unjudged},
                                {"refused", oracle.refused},
+                               {"failed", oracle.failed},
                                {"fallbacks", oracle.po.fallbacks()}};
         }
         if (oracle_poses) {
-            j["frames"] = json{{"in", oracle.judged + oracle.unjudged + oracle.refused},
-                               {"refused", oracle.refused + oracle.unjudged},
-                               {"processed", oracle.judged},
-                               {"untested", oracle.judged_untested}};
+            j["frames"] =
+                json{{"in", oracle.judged + oracle.unjudged + oracle.refused + oracle.failed},
+                     {"refused", oracle.refused + oracle.unjudged + oracle.failed},
+                     {"processed", oracle.judged},
+                     {"untested", oracle.judged_untested}};
         } else {
             j["frames"] = json{{"in", static_cast<long long>(c.frames_in)},
                                {"refused", static_cast<long long>(c.frames_refused)},

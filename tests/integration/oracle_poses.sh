@@ -49,6 +49,7 @@ print(f"faults: oracle F1 {o['detection']['f1']:.4f} (recall {o['detection']['re
       f"product parity F1 {p['detection']['f1']:.4f}; oracle {o['oracle']}")
 assert o["oracle"]["judged"] == 200 and o["oracle"]["fallbacks"] == 0, o["oracle"]
 assert o["oracle"]["without_truth"] == 0 and o["oracle"]["refused"] == 0, o["oracle"]
+assert o["oracle"]["failed"] == 0, o["oracle"]
 assert o["frames"]["processed"] == 200 and o["trajectory"] is None, o
 assert o["detection"]["f1"] >= p["detection"]["f1"] - 0.02, (o["detection"], p["detection"])
 PYEOF
