@@ -43,8 +43,6 @@ import sfd_tool_cli  # tools/sfd_tool_cli.py
 
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
 
 def fail(msg):
     """Bad usage or input: one line on stderr, exit 2."""
@@ -60,20 +58,7 @@ except ImportError:  # the venv has it (tools/requirements.txt)
 
 def import_types():
     """The generated LCM types (package sfd)."""
-    try:
-        from sfd import feature_verdict_t  # noqa: F401
-    except ImportError:
-        for p in (os.environ.get("SFD_LCM_PYTHON", ""),
-                  os.path.join(ROOT, "build", "host", "lcm_types", "python")):
-            if p and os.path.isdir(os.path.join(p, "sfd")):
-                sys.path.insert(0, p)
-                break
-    try:
-        import sfd
-        return sfd
-    except ImportError:
-        fail("no generated LCM types (package sfd): build the host preset or set "
-                 "SFD_LCM_PYTHON")
+    return sfd_tool_cli.import_lcm_types("review.py")
 
 
 STATUS = ((1, "consistent", "tab:green"), (2, "spurious", "tab:red"), (0, "untested", "0.6"))

@@ -64,3 +64,26 @@ def positional(argv, doc, count, usage, at_least=False):
         print("usage: %s" % usage, file=sys.stderr)
         sys.exit(2)
     return args
+
+
+def import_lcm_types(prog):
+    """The generated LCM Python types (package `sfd`): found on PYTHONPATH, else in
+    $SFD_LCM_PYTHON, else in build/host/lcm_types/python of the source tree (review.py,
+    strip_spurious.py). Returns the package;
+    without it, one line on stderr naming PROG and exit 2."""
+    try:
+        from sfd import feature_verdict_t  # noqa: F401
+    except ImportError:
+        root = os.path.dirname(_HERE)
+        for p in (os.environ.get("SFD_LCM_PYTHON", ""),
+                  os.path.join(root, "build", "host", "lcm_types", "python")):
+            if p and os.path.isdir(os.path.join(p, "sfd")):
+                sys.path.insert(0, p)
+                break
+    try:
+        import sfd
+        return sfd
+    except ImportError:
+        print("%s: no generated LCM types (package sfd): build the host preset or set "
+              "SFD_LCM_PYTHON" % prog, file=sys.stderr)
+        sys.exit(2)

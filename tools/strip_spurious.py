@@ -18,8 +18,6 @@ import sys
 
 import sfd_tool_cli  # tools/sfd_tool_cli.py
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
 
 def fail(msg):
     """Bad usage or input: one line on stderr, exit 2."""
@@ -30,23 +28,11 @@ def fail(msg):
 def import_types():
     """lcm and the generated LCM types (package sfd)."""
     try:
-        import lcm  # noqa: F401
+        import lcm
     except ImportError:
         fail("the Python module 'lcm' is missing (tools/setup.sh installs it)")
-    try:
-        from sfd import feature_frame_t  # noqa: F401
-    except ImportError:
-        for p in (os.environ.get("SFD_LCM_PYTHON", ""),
-                  os.path.join(ROOT, "build", "host", "lcm_types", "python")):
-            if p and os.path.isdir(os.path.join(p, "sfd")):
-                sys.path.insert(0, p)
-                break
-    try:
-        import lcm
-        from sfd import feature_frame_t, truth_t
-        return lcm, feature_frame_t, truth_t
-    except ImportError:
-        fail("no generated LCM types (package sfd): build the host preset or set SFD_LCM_PYTHON")
+    sfd = sfd_tool_cli.import_lcm_types("strip_spurious.py")
+    return lcm, sfd.feature_frame_t, sfd.truth_t
 
 
 def main():
