@@ -191,7 +191,9 @@ extern "C" sfd_status_t sfd_assoc_init(sfd_assoc_t *assoc, const sfd_assoc_param
     assoc->params = p;
     if (sfd_prng_seed(&assoc->rng, p.seed) != SFD_OK) return SFD_ERR_INVAL;
     if (sfd_chi2_quantile_upper(p.false_alarm_rate, 1, &assoc->chi2_1) != SFD_OK ||
-        sfd_chi2_quantile_upper(p.false_alarm_rate, 2, &assoc->chi2_2) != SFD_OK) {
+        sfd_chi2_quantile_upper(p.false_alarm_rate, 2, &assoc->chi2_2) != SFD_OK ||
+        sfd_chi2_quantile_upper(0.5 * (1.0 + p.false_alarm_rate), 1, &assoc->chi2_1_trunc_median) !=
+            SFD_OK) {
         return SFD_ERR_NUMERIC;
     }
     assoc->initialized = 1;

@@ -108,9 +108,11 @@ typedef struct {
     sfd_prng_t rng;
     double chi2_1; /**< chi2_{1, 1-alpha}: Sampson threshold in units of sigma^2 */
     double chi2_2; /**< chi2_{2, 1-alpha}: reprojection / transfer threshold in sigma^2 units */
-    double sampson_scale; /**< this frame's noise scale of the Sampson distance: the median of
-                               the chosen hypothesis' distances over the chi2(1) median
-                               (core/docs/association.md "Noise scale"); 1 for other scores */
+    double chi2_1_trunc_median; /**< median of chi2(1) truncated at chi2_1: its quantile at
+                                     (1 - alpha) / 2 (the noise scale's refinement) */
+    double sampson_scale; /**< this frame's noise scale of the Sampson distance, from the chosen
+                               hypothesis' distances (core/docs/association.md "Noise scale");
+                               1 for other scores */
     int32_t valid_idx[SFD_MAX_FEATURES];
     uint8_t valid[SFD_MAX_FEATURES];
     uint8_t cur[SFD_MAX_FEATURES];
