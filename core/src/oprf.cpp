@@ -29,26 +29,39 @@ class OrderStats {
     OrderStats(float *v, int32_t n) : v_(v), n_(n) {}
     /// The k-th smallest value (0 <= k < n).
     float kth(int32_t k) {
-        int32_t lo = 0, hi = n_;
+        const int32_t lo = bracket_low(k);
+        int32_t hi = n_;
         for (int32_t i = 0; i < np_; ++i) {
             if (part_[i] == k) return v_[k];
-            if (part_[i] < k && part_[i] + 1 > lo) lo = part_[i] + 1;
             if (part_[i] > k && part_[i] < hi) hi = part_[i];
         }
         const float x = select_kth(v_ + lo, hi - lo, k - lo);
         if (np_ < kMaxParts) part_[np_++] = k;  // a full list only costs speed
         return x;
     }
-    /// The median of the m smallest values (1 <= m <= n), as median_in_place() defines it.
+    /// The median of the m smallest values (1 <= m <= n), as median_in_place() defines it: for
+    /// an even m the (m/2 - 1)-th smallest is the largest below the (m/2)-th, found among the
+    /// entries above the nearest partition below it.
     double median_of_smallest(int32_t m) {
         const int32_t k = m / 2;
         const double upper = static_cast<double>(kth(k));
         if (m % 2 == 1) return upper;
-        return 0.5 * (static_cast<double>(kth(k - 1)) + upper);
+        const int32_t lo = bracket_low(k);
+        float lower = v_[lo == k ? k - 1 : lo];
+        for (int32_t i = lo + 1; i < k; ++i) lower = (lower < v_[i]) ? v_[i] : lower;
+        return 0.5 * (static_cast<double>(lower) + upper);
     }
 
   private:
-    static constexpr int32_t kMaxParts = 2 * (kScaleRefinements + 1);
+    /// One past the nearest partition below k, 0 when there is none.
+    int32_t bracket_low(int32_t k) const {
+        int32_t lo = 0;
+        for (int32_t i = 0; i < np_; ++i) {
+            if (part_[i] < k && part_[i] + 1 > lo) lo = part_[i] + 1;
+        }
+        return lo;
+    }
+    static constexpr int32_t kMaxParts = kScaleRefinements + 1;
     float *v_;
     int32_t n_;
     int32_t part_[kMaxParts] = {};
