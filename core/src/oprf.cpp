@@ -71,13 +71,15 @@ class OrderStats {
 /// The frame's noise scale s of the Sampson distances d[0..n) (units of sigma^2; n >=
 /// kScaleMinMatches; core/docs/association.md "Noise scale"). Start: median(d) / median of
 /// chi2(1), robust while fewer than half are spurious but inflated by the spurious ones (30 %
-/// of them far out move the median to the 0.71 quantile of chi2(1): s = 2.4 instead of 1). Then
+/// of them far out move the median to about the 0.71 quantile of chi2(1): s = 2.4 measured,
+/// about 2.5 in theory, instead of 1). Then
 /// at most kScaleRefinements fixed-point steps over the matches inside the gate, d <= c s with
 /// c = chi2_{1,1-alpha}: if those are chi2(1) in units of s, they are a chi2(1) truncated at c,
 /// whose median is the chi2(1) quantile at (1 - alpha) / 2 (@p trunc_median), so s' = median{d
 /// <= c s} / trunc_median. The m matches inside are the m smallest distances, so their median
 /// is an order statistic of d. The step is a contraction around the true scale (an s that is
-/// low lets in more of the inliers' tail and moves back up), stops when it changes s by under
+/// low cuts off more of the inliers' tail, but the median of what is left falls by less than
+/// s did, so s moves back up; slope about 0.09 at alpha = 1 %), stops when it changes s by under
 /// 1 %, and keeps the last s when fewer than kScaleMinMatches are inside. It runs only when the
 /// start leaves more matches outside the gate than alpha explains (over n alpha + 8 sqrt(n
 /// alpha (1 - alpha)), a binomial bound widened for the frame-to-frame spread of the

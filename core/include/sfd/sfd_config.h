@@ -5,12 +5,12 @@
  *        this header is included (all translation units of one build must agree).
  *
  * Memory cost at 256 features and L = 5 (x86-64, printed by the `proof.state_sizes` test):
- * sfd_parity_t 97616 B (the sliding window of observations, linear in SFD_MAX_FEATURES *
- * SFD_MAX_WINDOW), sfd_landmark_map_t 36536 B (SFD_MAX_LANDMARKS = 256), sfd_assoc_t 4384 B
- * with its work space sfd_assoc_work_t 14336 B, sfd_ekf_t 2000 B: 156592 B for the detectors
- * with the single-state EKF, which that test checks against SPEC's 256 KiB (also at compile
- * time, so the cross builds prove it). The whole pipeline with the sliding-window filter
- * (sfd_pipeline_t) is 337288 B, over that budget (core/docs/pipeline.md "Memory"). Stack per
+ * sfd_parity_t 60768 B (the sliding window of observations, linear in SFD_MAX_FEATURES *
+ * SFD_MAX_WINDOW), sfd_landmark_map_t 36536 B (SFD_MAX_LANDMARKS = 256), sfd_assoc_t 4392 B
+ * with its work space sfd_assoc_work_t 14336 B, sfd_ekf_t 2000 B: 119752 B for the detectors
+ * with the single-state EKF. The whole pipeline with the sliding-window filter
+ * (sfd_pipeline_t) is 260336 B, within SPEC's 256 KiB; that test checks it (also at compile
+ * time, so the cross builds prove it; core/docs/pipeline.md "Memory"). Stack per
  * call is bounded separately (`proof.stack_usage`).
  */
 #ifndef SFD_CONFIG_H
