@@ -6,7 +6,12 @@ Replaying the copy (`sfd-replay OUT --method none`) measures the trajectory the 
 reaches when no labelled fault reaches it, the floor of issue 16's drift figure
 (docs/evaluation.md "Drift with perfect detection").
 
-Usage: strip_spurious.py IN.lcmlog OUT.lcmlog
+Usage: strip_spurious.py IN.lcmlog OUT.lcmlog [--frame-stride K]
+
+--frame-stride K keeps only every K-th FEATURES message (the first, the (K+1)-th, ...) and the
+TRUTH of those frames: the same flight seen by a camera K times slower, for the drift's
+dependence on the spacing of the window filter's clones (docs/evaluation.md "Drift with perfect
+detection"). IMU and CAMERA_INFO are kept whole.
 
 Every other event is copied unchanged, in order, with its timestamp. A FEATURES message keeps
 its other features in their order; one whose frame has no TRUTH is copied unchanged. The
@@ -41,7 +46,11 @@ def main():
     sfd_tool_cli.add_version(ap, "strip_spurious.py")
     ap.add_argument("input", metavar="IN.lcmlog")
     ap.add_argument("output", metavar="OUT.lcmlog")
+    ap.add_argument("--frame-stride", type=int, default=1, metavar="K",
+                    help="keep every K-th frame (FEATURES and its TRUTH), K >= 1 (1)")
     a = ap.parse_args()
+    if a.frame_stride < 1:
+        fail(f"--frame-stride {a.frame_stride}: want an integer >= 1")
     if os.path.abspath(a.input) == os.path.abspath(a.output) or (
             os.path.exists(a.output) and os.path.samefile(a.input, a.output)):
         fail(f"OUT {a.output} is IN")
@@ -51,7 +60,13 @@ def main():
     except (IOError, OSError, ValueError) as e:
         fail(f"{a.input}: {e}")
     spurious = {}  # frame time -> labelled spurious track ids
+    dropped = set()  # frame times outside the stride
+    frames = 0
     for e in events:
+        if e.channel == "FEATURES":
+            if frames % a.frame_stride:
+                dropped.add(feature_frame_t.decode(e.data).utime)
+            frames += 1
         if e.channel == "TRUTH":
             t = truth_t.decode(e.data)
             spurious[t.utime] = {t.track_id[i] for i in range(t.num_features) if t.spurious[i]}
@@ -59,8 +74,12 @@ def main():
     out = lcm.EventLog(a.output, "w", overwrite=True)
     for e in events:
         data = e.data
+        if e.channel == "TRUTH" and dropped and truth_t.decode(e.data).utime in dropped:
+            continue
         if e.channel == "FEATURES":
             f = feature_frame_t.decode(e.data)
+            if f.utime in dropped:
+                continue
             bad = spurious.get(f.utime, set())
             keep = [i for i in range(f.num_features) if f.track_id[i] not in bad]
             removed += f.num_features - len(keep)
@@ -76,7 +95,7 @@ def main():
         out.write_event(e.timestamp, e.channel, data)
     out.close()
     print(f"strip_spurious.py: {a.output}: {len(events)} events, {kept} features kept, "
-          f"{removed} labelled spurious removed")
+          f"{removed} labelled spurious removed, {len(dropped)} of {frames} frames left out")
 
 
 if __name__ == "__main__":

@@ -11,7 +11,9 @@
 #    the product's parity (F1 within 0.02 of it or above: it has the poses exactly);
 #  - bad usage is exit 2: with -o, with --score-only, with a method other than parity;
 #  - tools/strip_spurious.py (the input a perfect detector leaves the filter) removes exactly the
-#    labelled features: replayed, none of them gets a verdict and every clean one is judged.
+#    labelled features: replayed, none of them gets a verdict and every clean one is judged;
+#    with --frame-stride 2 it keeps the 1st, 3rd, ... frame and their TRUTH (100 of 200 frames,
+#    each judged, their clean features all there), and refuses a stride of 0 (exit 2).
 # usage: oracle_poses.sh BUILD_DIR SOURCE_DIR PYTHON PYTHONPATH_FOR_TYPES
 set -euo pipefail
 build="$1"; src="$2"; py="$3"; pytypes="$4"
@@ -83,4 +85,30 @@ assert s["spurious"] == a["spurious"] > 0 and s["untested_spurious"] == s["spuri
 # method none judges every feature it gets CONSISTENT: every clean one is still there
 assert s["clean"] == a["clean"] and s["tn"] == s["clean"] and s["untested_clean"] == 0, (s, a)
 PYEOF
+
+PYTHONPATH="$pytypes" "$py" "$src/tools/strip_spurious.py" "$tmp/faults.lcmlog" \
+  "$tmp/stride2.lcmlog" --frame-stride 2
+"$replay" "$tmp/stride2.lcmlog" --config "$cfg" --method none --summary "$tmp/stride2.json" \
+  >/dev/null
+PYTHONPATH="$pytypes" "$py" - "$tmp" <<'PYEOF'
+import json, sys
+import lcm
+from sfd import feature_frame_t, truth_t
+tmp = sys.argv[1]
+def times(path, channel, t):
+    return [t.decode(e.data).utime for e in lcm.EventLog(path, "r") if e.channel == channel]
+full = times(tmp + "/faults.lcmlog", "FEATURES", feature_frame_t)
+kept = times(tmp + "/stride2.lcmlog", "FEATURES", feature_frame_t)
+assert kept == full[::2] and len(kept) == 100, (len(full), len(kept))
+assert times(tmp + "/stride2.lcmlog", "TRUTH", truth_t) == kept
+j = json.load(open(tmp + "/stride2.json"))
+s = j["detection"]
+assert j["frames"]["processed"] == 100 and j["truth"]["frames"] == 100, j
+assert s["untested_spurious"] == s["spurious"] > 0 and s["tn"] == s["clean"] > 0, s
+print(f"stride 2: {len(kept)} of {len(full)} frames, {s['clean']} clean features judged")
+PYEOF
+rc=0
+PYTHONPATH="$pytypes" "$py" "$src/tools/strip_spurious.py" "$tmp/faults.lcmlog" \
+  "$tmp/stride0.lcmlog" --frame-stride 0 2>/dev/null || rc=$?
+[ "$rc" -eq 2 ] && [ ! -e "$tmp/stride0.lcmlog" ] || { echo "stride 0: exit $rc" >&2; exit 1; }
 echo "oracle_poses: ok"
