@@ -13,8 +13,10 @@ TRUTH of those frames: the same flight seen by a camera K times slower, for the 
 dependence on the spacing of the window filter's clones (docs/evaluation.md "Drift with perfect
 detection"). IMU and CAMERA_INFO are kept whole.
 
-Every other event is copied unchanged, in order, with its timestamp. A FEATURES message keeps
-its other features in their order; one whose frame has no TRUTH is copied unchanged. The
+Every other event is copied unchanged, in order, with its timestamp (with --frame-stride, the
+TRUTH of a left-out frame is left out too, unless a kept FEATURES message has the same time). A
+FEATURES message keeps its other features in their order; one whose frame has no TRUTH is copied
+unchanged. The
 generated Python LCM types are found as `sfd` on PYTHONPATH, else in $SFD_LCM_PYTHON, else in
 build/host/lcm_types/python next to this script. Exit 0; 2 for bad usage or an unreadable log."""
 import argparse
@@ -60,26 +62,34 @@ def main():
     except (IOError, OSError, ValueError) as e:
         fail(f"{a.input}: {e}")
     spurious = {}  # frame time -> labelled spurious track ids
-    dropped = set()  # frame times outside the stride
+    # The stride counts FEATURES messages in log order: message j is kept when j % K == 0. The
+    # TRUTH of a left-out frame goes with it, unless a kept message has the same time.
+    skip = set()  # indices (in events) of the FEATURES messages left out
+    kept_times, left_times = set(), set()
     frames = 0
-    for e in events:
+    for k, e in enumerate(events):
         if e.channel == "FEATURES":
-            if frames % a.frame_stride:
-                dropped.add(feature_frame_t.decode(e.data).utime)
+            if a.frame_stride > 1:
+                ut = feature_frame_t.decode(e.data).utime
+                if frames % a.frame_stride:
+                    skip.add(k)
+                    left_times.add(ut)
+                else:
+                    kept_times.add(ut)
             frames += 1
         if e.channel == "TRUTH":
             t = truth_t.decode(e.data)
             spurious[t.utime] = {t.track_id[i] for i in range(t.num_features) if t.spurious[i]}
-    removed = kept = 0
+    truth_left = left_times - kept_times
+    removed = kept = written = 0
     out = lcm.EventLog(a.output, "w", overwrite=True)
-    for e in events:
+    for k, e in enumerate(events):
         data = e.data
-        if e.channel == "TRUTH" and dropped and truth_t.decode(e.data).utime in dropped:
+        if k in skip or (e.channel == "TRUTH" and truth_left and
+                         truth_t.decode(e.data).utime in truth_left):
             continue
         if e.channel == "FEATURES":
             f = feature_frame_t.decode(e.data)
-            if f.utime in dropped:
-                continue
             bad = spurious.get(f.utime, set())
             keep = [i for i in range(f.num_features) if f.track_id[i] not in bad]
             removed += f.num_features - len(keep)
@@ -93,9 +103,10 @@ def main():
                 setattr(g, name, dst)
             data = g.encode()
         out.write_event(e.timestamp, e.channel, data)
+        written += 1
     out.close()
-    print(f"strip_spurious.py: {a.output}: {len(events)} events, {kept} features kept, "
-          f"{removed} labelled spurious removed, {len(dropped)} of {frames} frames left out")
+    print(f"strip_spurious.py: {a.output}: {written} of {len(events)} events, {kept} features "
+          f"kept, {removed} labelled spurious removed, {len(skip)} of {frames} frames left out")
 
 
 if __name__ == "__main__":

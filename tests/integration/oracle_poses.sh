@@ -101,14 +101,22 @@ full = times(tmp + "/faults.lcmlog", "FEATURES", feature_frame_t)
 kept = times(tmp + "/stride2.lcmlog", "FEATURES", feature_frame_t)
 assert kept == full[::2] and len(kept) == 100, (len(full), len(kept))
 assert times(tmp + "/stride2.lcmlog", "TRUTH", truth_t) == kept
+def count(path, channel):
+    return sum(1 for e in lcm.EventLog(path, "r") if e.channel == channel)
+for ch in ("IMU", "CAMERA_INFO"):
+    assert count(tmp + "/stride2.lcmlog", ch) == count(tmp + "/faults.lcmlog", ch) > 0, ch
 j = json.load(open(tmp + "/stride2.json"))
 s = j["detection"]
 assert j["frames"]["processed"] == 100 and j["truth"]["frames"] == 100, j
 assert s["untested_spurious"] == s["spurious"] > 0 and s["tn"] == s["clean"] > 0, s
+assert s["untested_clean"] == 0, s
 print(f"stride 2: {len(kept)} of {len(full)} frames, {s['clean']} clean features judged")
 PYEOF
 rc=0
 PYTHONPATH="$pytypes" "$py" "$src/tools/strip_spurious.py" "$tmp/faults.lcmlog" \
-  "$tmp/stride0.lcmlog" --frame-stride 0 2>/dev/null || rc=$?
-[ "$rc" -eq 2 ] && [ ! -e "$tmp/stride0.lcmlog" ] || { echo "stride 0: exit $rc" >&2; exit 1; }
+  "$tmp/stride0.lcmlog" --frame-stride 0 2>"$tmp/stride0.err" || rc=$?
+[ "$rc" -eq 2 ] && [ ! -e "$tmp/stride0.lcmlog" ] && [ "$(wc -l <"$tmp/stride0.err")" -eq 1 ] || {
+  echo "stride 0: exit $rc, want 2 with one line and no output" >&2; cat "$tmp/stride0.err" >&2
+  exit 1
+}
 echo "oracle_poses: ok"
