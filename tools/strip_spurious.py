@@ -10,14 +10,13 @@ Usage: strip_spurious.py IN.lcmlog OUT.lcmlog [--frame-stride K]
 
 --frame-stride K keeps only every K-th FEATURES message (the first, the (K+1)-th, ...) and the
 TRUTH of those frames: the same flight seen by a camera K times slower, for the drift's
-dependence on the spacing of the window filter's clones (docs/evaluation.md "Drift with perfect
-detection"). IMU and CAMERA_INFO are kept whole.
+dependence on the spacing of the window filter's clones (docs/evaluation.md "The floor depends on
+the spacing of the clones"). IMU and CAMERA_INFO are kept whole.
 
 Every other event is copied unchanged, in order, with its timestamp (with --frame-stride, the
 TRUTH of a left-out frame is left out too, unless a kept FEATURES message has the same time). A
 FEATURES message keeps its other features in their order; one whose frame has no TRUTH is copied
-unchanged. The
-generated Python LCM types are found as `sfd` on PYTHONPATH, else in $SFD_LCM_PYTHON, else in
+unchanged. The generated Python LCM types are found as `sfd` on PYTHONPATH, else in $SFD_LCM_PYTHON, else in
 build/host/lcm_types/python next to this script. Exit 0; 2 for bad usage or an unreadable log."""
 import argparse
 import os
@@ -64,9 +63,10 @@ def main():
     spurious = {}  # frame time -> labelled spurious track ids
     # The stride counts FEATURES messages in log order: message j is kept when j % K == 0. The
     # TRUTH of a left-out frame goes with it, unless a kept message has the same time.
-    skip = set()  # indices (in events) of the FEATURES messages left out
+    skip = set()  # indices (in events) of the messages left out
     kept_times, left_times = set(), set()
-    frames = 0
+    truth_at = []  # (index in events, frame time) of every TRUTH message
+    frames = left_out = 0
     for k, e in enumerate(events):
         if e.channel == "FEATURES":
             if a.frame_stride > 1:
@@ -74,19 +74,21 @@ def main():
                 if frames % a.frame_stride:
                     skip.add(k)
                     left_times.add(ut)
+                    left_out += 1
                 else:
                     kept_times.add(ut)
             frames += 1
         if e.channel == "TRUTH":
             t = truth_t.decode(e.data)
             spurious[t.utime] = {t.track_id[i] for i in range(t.num_features) if t.spurious[i]}
+            truth_at.append((k, t.utime))
     truth_left = left_times - kept_times
+    skip.update(k for k, ut in truth_at if ut in truth_left)
     removed = kept = written = 0
     out = lcm.EventLog(a.output, "w", overwrite=True)
     for k, e in enumerate(events):
         data = e.data
-        if k in skip or (e.channel == "TRUTH" and truth_left and
-                         truth_t.decode(e.data).utime in truth_left):
+        if k in skip:
             continue
         if e.channel == "FEATURES":
             f = feature_frame_t.decode(e.data)
@@ -106,7 +108,7 @@ def main():
         written += 1
     out.close()
     print(f"strip_spurious.py: {a.output}: {written} of {len(events)} events, {kept} features "
-          f"kept, {removed} labelled spurious removed, {len(skip)} of {frames} frames left out")
+          f"kept, {removed} labelled spurious removed, {left_out} of {frames} frames left out")
 
 
 if __name__ == "__main__":

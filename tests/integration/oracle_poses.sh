@@ -87,7 +87,8 @@ assert s["clean"] == a["clean"] and s["tn"] == s["clean"] and s["untested_clean"
 PYEOF
 
 PYTHONPATH="$pytypes" "$py" "$src/tools/strip_spurious.py" "$tmp/faults.lcmlog" \
-  "$tmp/stride2.lcmlog" --frame-stride 2
+  "$tmp/stride2.lcmlog" --frame-stride 2 | tee "$tmp/stride2.txt"
+grep -q ", 100 of 200 frames left out$" "$tmp/stride2.txt" || { echo "stride 2: count" >&2; exit 1; }
 "$replay" "$tmp/stride2.lcmlog" --config "$cfg" --method none --summary "$tmp/stride2.json" \
   >/dev/null
 PYTHONPATH="$pytypes" "$py" - "$tmp" <<'PYEOF'
