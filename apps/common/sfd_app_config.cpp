@@ -578,7 +578,8 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                      {"landmark_max_age_s", &nv.landmark_max_age_s},
                      {"landmark_gate_alpha", &nv.landmark_gate_alpha},
                      {"min_parallax_px", &nv.min_parallax_px},
-                     {"window_gate_alpha", &nv.window_gate_alpha}};
+                     {"window_gate_alpha", &nv.window_gate_alpha},
+                     {"keyframe_parallax_rad", &nv.keyframe_parallax_rad}};
         struct FInt {
             const char *name;
             int32_t *dst;
@@ -773,6 +774,15 @@ bool validate(const AppConfig &cfg, std::string *error) {
     c.open_interval("filter.window_gate_alpha", nv.window_gate_alpha, 0.0, 0.5, true);
     c.flag("filter.first_estimates", nv.first_estimates);
     c.flag("filter.observability_constrained", nv.observability_constrained);
+    c.non_negative("filter.keyframe_parallax_rad", nv.keyframe_parallax_rad);
+    // Keyframes keep the parity window's older window_frames - 1 frames as the newest clones and
+    // need at least one older clone besides (sfd_window_params_t.keyframe_recent).
+    if (nv.keyframe_parallax_rad > 0.0 && nv.window_filter == 1 &&
+        nv.window_size < p.window_frames + 1) {
+        c.fail("filter.keyframe_parallax_rad", format_double(nv.keyframe_parallax_rad),
+               "needs filter.window_size >= window_frames + 1 (" +
+                   std::to_string(p.window_frames + 1) + ")");
+    }
     c.open_interval("filter.init_rest_s", nv.init_rest_s, 0.0, 60.0, false);
     c.flag("filter.init_from_truth", nv.init_from_truth);
     for (int k = 0; k < 3; ++k) {

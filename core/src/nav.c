@@ -34,6 +34,7 @@ void sfd_nav_config_default(sfd_nav_config_t *cfg) {
     cfg->window_gate_alpha = 0.01;
     cfg->first_estimates = 0;
     cfg->observability_constrained = 1;
+    cfg->keyframe_parallax_rad = 0.0;
     cfg->init_rest_s = 1.0;
     cfg->gyro_bias_at_rest = 1;
     cfg->landmark_depth_var_m2 = 100.0;
@@ -72,7 +73,8 @@ sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd
     }
     if ((cfg->window_filter != 0 && cfg->window_filter != 1) ||
         (cfg->first_estimates != 0 && cfg->first_estimates != 1) ||
-        (cfg->observability_constrained != 0 && cfg->observability_constrained != 1)) {
+        (cfg->observability_constrained != 0 && cfg->observability_constrained != 1) ||
+        !(cfg->keyframe_parallax_rad >= 0.0 && isfinite(cfg->keyframe_parallax_rad))) {
         return SFD_ERR_INVAL;
     }
     if (cfg->window_filter) {
@@ -84,6 +86,10 @@ sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd
         wp.gate_alpha = cfg->window_gate_alpha;
         wp.first_estimates = cfg->first_estimates;
         wp.observability_constrained = cfg->observability_constrained;
+        /* Keyframes keep the parity test's older window_frames - 1 frames as the newest clones
+         * (it tests every frame against them). */
+        wp.keyframe_parallax_rad = cfg->keyframe_parallax_rad;
+        wp.keyframe_recent = params->window_frames - 1;
         if (sfd_window_init(&nav->win, &wp) != SFD_OK) return SFD_ERR_INVAL;
         sfd_rest_params_t rp;
         sfd_rest_params_default(&rp);

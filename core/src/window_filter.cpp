@@ -94,7 +94,10 @@ bool params_valid(const sfd_window_params_t &p) {
            (p.use_depth_prior == 0 || p.use_depth_prior == 1) && p.depth_var_floor_m2 > 0.0 &&
            std::isfinite(p.depth_var_floor_m2) && p.gauss_newton_iterations >= 1 &&
            p.gauss_newton_iterations <= 20 && (p.first_estimates == 0 || p.first_estimates == 1) &&
-           (p.observability_constrained == 0 || p.observability_constrained == 1);
+           (p.observability_constrained == 0 || p.observability_constrained == 1) &&
+           p.keyframe_parallax_rad >= 0.0 && std::isfinite(p.keyframe_parallax_rad) &&
+           (!(p.keyframe_parallax_rad > 0.0) ||
+            (p.keyframe_recent >= 1 && p.keyframe_recent <= p.window - 2));
 }
 
 /// Where the Jacobians are evaluated (core/docs/window_filter.md, "Consistency").
@@ -576,35 +579,97 @@ void augment(sfd_window_t *w, int64_t utime) {
     w->num_clones++;
 }
 
-/// Deletes the oldest clone: its rows and columns of P, and the observations made in it.
-void marginalize_oldest(sfd_window_t *w) {
+/// Deletes clone d (0 = the oldest): its rows and columns of P and the observations made in it.
+/// The later clones move down one place and their sequence numbers by one, so a track's
+/// observations stay consecutive in window order (with keyframes the clones are not consecutive
+/// frames; a track seen across a deleted middle clone keeps its other observations).
+void marginalize_clone(sfd_window_t *w, int d) {
     const int n = dim(*w);
-    const uint32_t oldest = w->clones[0].seq;
+    const uint32_t gone = w->clones[d].seq;
     for (int32_t k = 0; k < w->num_tracks; ++k) {
         sfd_window_track_t &t = w->tracks[k];
-        if (t.used <= 0 || t.first_clone != oldest) continue;
-        // Not used before its first clone leaves: its first observation (and depth prior) go.
-        for (int j = 1; j < t.used; ++j) {
-            t.xn[j - 1][0] = t.xn[j][0];
-            t.xn[j - 1][1] = t.xn[j][1];
-            for (int e = 0; e < 3; ++e) t.cov_xn[j - 1][e] = t.cov_xn[j][e];
+        if (t.used <= 0) continue;
+        if (t.first_clone > gone) {
+            if (d > 0) t.first_clone -= 1;
+            continue;
+        }
+        const uint32_t j0 = gone - t.first_clone;
+        if (j0 >= static_cast<uint32_t>(t.used)) continue;
+        const int j = static_cast<int>(j0);
+        // Not used before its clone leaves: that observation goes (with observation 0 the
+        // depth prior, which belongs to it).
+        for (int i = j + 1; i < t.used; ++i) {
+            t.xn[i - 1][0] = t.xn[i][0];
+            t.xn[i - 1][1] = t.xn[i][1];
+            for (int e = 0; e < 3; ++e) t.cov_xn[i - 1][e] = t.cov_xn[i][e];
         }
         t.used -= 1;
-        t.first_clone += 1;
-        t.depth_m = 0.0F;
+        if (j == 0) {
+            t.depth_m = 0.0F;
+            if (d == 0) t.first_clone += 1;  // the oldest: the later clones keep their numbers
+        }
     }
-    // Rows/columns kImu..kImu+5 removed: the later ones move up by 6.
+    // Rows/columns b..b+5 removed: the later ones move up by 6.
+    const int b = kImu + 6 * d;
     for (int i = 0; i < n; ++i) {
-        if (i >= kImu && i < kImu + 6) continue;
-        const int ri = (i >= kImu + 6) ? i - 6 : i;
+        if (i >= b && i < b + 6) continue;
+        const int ri = (i >= b + 6) ? i - 6 : i;
         for (int j = 0; j < n; ++j) {
-            if (j >= kImu && j < kImu + 6) continue;
-            const int rj = (j >= kImu + 6) ? j - 6 : j;
+            if (j >= b && j < b + 6) continue;
+            const int rj = (j >= b + 6) ? j - 6 : j;
             w->P[ri][rj] = w->P[i][j];
         }
     }
-    for (int c = 1; c < w->num_clones; ++c) w->clones[c - 1] = w->clones[c];
+    // The oldest leaving keeps every number (consecutive, never reused); a middle clone leaving
+    // renumbers the later ones so the window stays consecutive in sequence numbers.
+    for (int c = d + 1; c < w->num_clones; ++c) {
+        w->clones[c - 1] = w->clones[c];
+        if (d > 0) w->clones[c - 1].seq -= 1;
+    }
     w->num_clones--;
+    if (d > 0) w->next_seq -= 1;
+}
+
+void marginalize_oldest(sfd_window_t *w) {
+    marginalize_clone(w, 0);
+}
+
+/// Mean rotation-compensated parallax (normalized image units) between clones a < b over the
+/// tracks observed in both: |pi(R_CaCb (xb, 1)) - xa| with R_CaCb = R_CtoI^T R_a^T R_b R_CtoI,
+/// the displacement that translation alone explains. Negative when no track joins them.
+double clone_parallax(const sfd_window_t &w, int a, int b, const sfd_extrinsics_t &ext) {
+    const Mat3 R_CtoI = Eigen::Map<const Mat3>(ext.R_CtoI);
+    const Mat3 R_ab = R_CtoI.transpose() * quat_rot(w.clones[a].q_ItoW).transpose() *
+                      quat_rot(w.clones[b].q_ItoW) * R_CtoI;
+    const uint32_t sa = w.clones[a].seq;
+    const uint32_t sb = w.clones[b].seq;
+    double sum = 0.0;
+    int32_t count = 0;
+    for (int32_t k = 0; k < w.num_tracks; ++k) {
+        const sfd_window_track_t &t = w.tracks[k];
+        if (t.used <= 0 || t.first_clone > sa) continue;
+        const uint32_t jb = sb - t.first_clone;
+        if (jb >= static_cast<uint32_t>(t.used)) continue;
+        const uint32_t ja = sa - t.first_clone;
+        const Vec3 v = R_ab * Vec3(t.xn[jb][0], t.xn[jb][1], 1.0);
+        if (!(v(2) > 1e-6)) continue;
+        const double dx = v(0) / v(2) - t.xn[ja][0];
+        const double dy = v(1) / v(2) - t.xn[ja][1];
+        sum += std::sqrt(dx * dx + dy * dy);
+        ++count;
+    }
+    return count > 0 ? sum / count : -1.0;
+}
+
+/// Which clone leaves a full window: the oldest, or with keyframes (keyframe_parallax_rad > 0)
+/// the one just older than the newest keyframe_recent when it moved less than
+/// keyframe_parallax_rad from the clone before it (not a keyframe).
+int clone_to_marginalize(const sfd_window_t &w, const sfd_extrinsics_t &ext) {
+    if (!(w.prm.keyframe_parallax_rad > 0.0)) return 0;
+    const int cand = w.num_clones - 1 - w.prm.keyframe_recent;
+    if (cand < 1) return 0;
+    const double par = clone_parallax(w, cand - 1, cand, ext);
+    return (par >= 0.0 && par < w.prm.keyframe_parallax_rad) ? cand : 0;
 }
 
 bool obs_valid(const sfd_window_obs_t &o) {
@@ -864,8 +929,11 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
     }
 
     // Every observation is read (obs may be scratch->u.obs, which the update below overwrites).
-    // Tracks due: ended (not seen now), or reaching the oldest clone of a full window.
+    // The clone that leaves a full window after the update, chosen from the observations before
+    // the due tracks below are used and deleted.
     const bool full = w->num_clones >= w->prm.window;
+    const int leaving = full ? clone_to_marginalize(*w, *ext) : 0;
+    // Tracks due: ended (not seen now), or reaching the oldest clone of a full window.
     const uint32_t oldest = w->clones[0].seq;
     sfd_msckf_stack_reset(&scratch->stack, dim(*w));
     for (int32_t k = 0; k < w->num_tracks; ++k) {
@@ -913,7 +981,7 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
             result->update_status = (st != SFD_OK) ? st : SFD_ERR_NUMERIC;
         }
     }
-    if (w->num_clones >= w->prm.window) marginalize_oldest(w);
+    if (w->num_clones >= w->prm.window) marginalize_clone(w, leaving);
     compact_tracks(w);
     return SFD_OK;
 }

@@ -140,6 +140,16 @@ std::vector<BadValue> bad_values() {
          "filter.first_estimates: -1 is not 0 or 1"},
         {"filter.observability_constrained", [](C &c) { c.node.nav.observability_constrained = 2; },
          "filter.observability_constrained: 2 is not 0 or 1"},
+        {"filter.keyframe_parallax_rad", [](C &c) { c.node.nav.keyframe_parallax_rad = -0.01; },
+         "filter.keyframe_parallax_rad: -0.01 is not >= 0"},
+        {"filter.keyframe_parallax_rad", [](C &c) { c.node.nav.keyframe_parallax_rad = kNan; },
+         "filter.keyframe_parallax_rad: nan is not finite"},
+        {"filter.keyframe_parallax_rad",
+         [](C &c) {
+             c.node.nav.keyframe_parallax_rad = 0.02;
+             c.node.nav.window_size = 3;
+         },
+         "filter.keyframe_parallax_rad: 0.02 needs filter.window_size >= window_frames + 1 (4)"},
         {"filter.init_rest_s", [](C &c) { c.node.nav.init_rest_s = 0.0; },
          "filter.init_rest_s: 0 is not in (0, 60)"},
         {"filter.init_rest_s", [](C &c) { c.node.nav.init_rest_s = 60.0; },
@@ -264,6 +274,11 @@ void accepted_configurations_start_a_node(void **) {
         [](C &c) { c.node.nav.window_gate_alpha = 1e-12; },
         [](C &c) { c.node.nav.first_estimates = 1; },
         [](C &c) { c.node.nav.observability_constrained = 0; },
+        [](C &c) { c.node.nav.keyframe_parallax_rad = 0.02; },
+        [](C &c) {
+            c.node.nav.keyframe_parallax_rad = 0.02;
+            c.node.nav.window_size = 4;
+        },
         [](C &c) { c.node.nav.init_rest_s = 59.9; },
         [](C &c) {
             c.node.nav.window_filter = 0;

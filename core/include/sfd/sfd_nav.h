@@ -48,6 +48,10 @@ typedef struct {
     int32_t observability_constrained; /**< window filter, first_estimates 0: 1 current-estimate
                                             Jacobians with the observability constraint (the
                                             default), 0 without (core/docs/window_filter.md) */
+    double keyframe_parallax_rad;      /**< window filter: 0 the oldest clone leaves (default);
+                                            > 0 keyframes below this mean parallax leave instead,
+                                            the newest params.window_frames - 1 clones kept
+                                            consecutive (sfd_window_params_t) */
     sfd_ekf_noise_t noise;             /**< IMU noise densities */
     double p0_diag[SFD_EKF_DIM];       /**< initial variances, SFD_EKF_IDX_* order */
     double init_rest_s;                /**< IMU averaged at rest for the gravity start (s), > 0 */

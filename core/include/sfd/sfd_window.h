@@ -88,6 +88,15 @@ typedef struct {
                                             Jacobians corrected along gravity so the unobservable
                                             directions stay unobservable (1, the default); 0 no
                                             consistency treatment */
+    double keyframe_parallax_rad;      /**< 0: the oldest clone leaves a full window (0, the
+                                            default). > 0: keyframes: the clone just older than the
+                                            newest keyframe_recent leaves instead when its mean
+                                            rotation-compensated parallax from the clone before it is
+                                            below this (normalized image units, about radians), so the
+                                            older clones span more motion (core/docs/window_filter.md
+                                            "Keyframes") */
+    int32_t keyframe_recent; /**< with keyframes: the newest clones always kept consecutive, 1..L-2
+                                  (the parity test's window_frames - 1) */
 } sfd_window_params_t;
 
 /** One observation handed to sfd_window_frame(). */
