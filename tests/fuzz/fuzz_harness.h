@@ -101,9 +101,12 @@ enum {
     FZ_SEQ_HEADER = 3
 };
 
-/** Configuration byte: window L (bits 0-1: default 3, 2, 4, 5), bit 2 method NONE, bit 3 follow
- *  camera 0 (else the first CAMERA_INFO's), bit 4 isolation off, bit 5 approximate covariance
- *  (28), bits 6-7 group size (default 3, 1, 2, 4), each clamped to the build's capacities. */
+/** Configuration byte: parity window L (bits 0-1: default 3, 2, 4, 5), bit 3 follow camera 0
+ *  (else the first CAMERA_INFO's), bit 4 isolation off, bit 5 approximate covariance (28), bits
+ *  6-7 group size (default 3, 1, 2, 4), each clamped to the build's capacities. Bit 2 clear:
+ *  parity, with the filter's translation when bits 6-7 are both set. Bit 2 set: bits 4-5 pick a
+ *  filter method (none, oprf, both, ransac1; ransacf with bit 0), bits 6-7 both set the
+ *  single-state EKF, and `both` with L = 2 the window filter's keyframe option. */
 void fz_config_from_byte(uint8_t b, sfd_node_config_t *cfg);
 
 /** Compact FEATURES payload: utime (int64), camera_id (int32), num_features (int32), then per
