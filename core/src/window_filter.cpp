@@ -2,7 +2,7 @@
 // The sliding-window navigation filter (sfd_window.h, core/docs/window_filter.md): IMU
 // propagation with observability-constrained (default) or first-estimate Jacobians, cloning,
 // track bookkeeping, triangulation over the window, the gated null-space update
-// (msckf_update.cpp) and marginalization of the oldest clone.
+// (msckf_update.cpp) and marginalization of the oldest clone (or, with keyframes, of a middle one).
 #include "float_round.h"
 #include "core_private.hpp"
 
@@ -579,6 +579,13 @@ void augment(sfd_window_t *w, int64_t utime) {
     w->num_clones++;
 }
 
+/// Position of clone sequence number s in a track whose first observation is in clone first:
+/// s - first modulo 2^32 (sequence numbers wrap), or INT32_MAX when s is before first.
+int32_t seq_offset(uint32_t s, uint32_t first) {
+    const auto d = static_cast<int32_t>(s - first);
+    return d < 0 ? INT32_MAX : d;
+}
+
 /// Deletes clone d (0 = the oldest): its rows and columns of P and the observations made in it.
 /// The later clones move down one place and their sequence numbers by one, so a track's
 /// observations stay consecutive in window order (with keyframes the clones are not consecutive
@@ -589,13 +596,12 @@ void marginalize_clone(sfd_window_t *w, int d) {
     for (int32_t k = 0; k < w->num_tracks; ++k) {
         sfd_window_track_t &t = w->tracks[k];
         if (t.used <= 0) continue;
-        if (t.first_clone > gone) {
+        const int32_t j = seq_offset(gone, t.first_clone);
+        if (j == INT32_MAX) {  // starts after the deleted clone
             if (d > 0) t.first_clone -= 1;
             continue;
         }
-        const uint32_t j0 = gone - t.first_clone;
-        if (j0 >= static_cast<uint32_t>(t.used)) continue;
-        const int j = static_cast<int>(j0);
+        if (j >= t.used) continue;
         // Not used before its clone leaves: that observation goes (with observation 0 the
         // depth prior, which belongs to it).
         for (int i = j + 1; i < t.used; ++i) {
@@ -647,10 +653,10 @@ double clone_parallax(const sfd_window_t &w, int a, int b, const sfd_extrinsics_
     int32_t count = 0;
     for (int32_t k = 0; k < w.num_tracks; ++k) {
         const sfd_window_track_t &t = w.tracks[k];
-        if (t.used <= 0 || t.first_clone > sa) continue;
-        const uint32_t jb = sb - t.first_clone;
-        if (jb >= static_cast<uint32_t>(t.used)) continue;
-        const uint32_t ja = sa - t.first_clone;
+        if (t.used <= 0) continue;
+        const int32_t ja = seq_offset(sa, t.first_clone);
+        const int32_t jb = seq_offset(sb, t.first_clone);
+        if (ja >= t.used || jb >= t.used) continue;
         const Vec3 v = R_ab * Vec3(t.xn[jb][0], t.xn[jb][1], 1.0);
         if (!(v(2) > 1e-6)) continue;
         const double dx = v(0) / v(2) - t.xn[ja][0];
@@ -705,6 +711,8 @@ extern "C" sfd_status_t sfd_window_params_default(sfd_window_params_t *params) {
     params->gauss_newton_iterations = 5;
     params->first_estimates = 0;
     params->observability_constrained = 1;
+    params->keyframe_parallax_rad = 0.0;
+    params->keyframe_recent = 2;
     return SFD_OK;
 }
 
@@ -933,13 +941,17 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
     // the due tracks below are used and deleted.
     const bool full = w->num_clones >= w->prm.window;
     const int leaving = full ? clone_to_marginalize(*w, *ext) : 0;
-    // Tracks due: ended (not seen now), or reaching the oldest clone of a full window.
+    // Tracks due: ended (not seen now), or starting in the oldest clone when it leaves a full
+    // window. With keyframes a middle clone that leaves takes its observations unused (tracks
+    // through it keep their others and stay, so the keyframes keep tracks that join them; a track
+    // started between keyframes can lose its first observations this way while the camera
+    // hovers: core/docs/window_filter.md "Keyframes").
     const uint32_t oldest = w->clones[0].seq;
     sfd_msckf_stack_reset(&scratch->stack, dim(*w));
     for (int32_t k = 0; k < w->num_tracks; ++k) {
         sfd_window_track_t &t = w->tracks[k];
         if (t.used <= 0) continue;
-        const bool due = !t.seen || (full && t.first_clone == oldest);
+        const bool due = !t.seen || (full && leaving == 0 && t.first_clone == oldest);
         if (!due) continue;
         result->candidates++;
         if (t.used < w->prm.min_observations) {

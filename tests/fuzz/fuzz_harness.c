@@ -364,7 +364,8 @@ void fz_config_from_byte(uint8_t b, sfd_node_config_t *cfg) {
         }
         /* `both` with a 2-frame parity window: the window filter's keyframe option (a middle
          * clone leaves; keyframe_recent 1) */
-        if (cfg->params.method == SFD_METHOD_BOTH && (b & 3u) == 1u) {
+        if (cfg->params.method == SFD_METHOD_BOTH && (b & 3u) == 1u &&
+            cfg->nav.window_size >= cfg->params.window_frames + 1) {
             cfg->nav.keyframe_parallax_rad = 0.02;
         }
         if ((b & 0xC0u) == 0xC0u) cfg->nav.window_filter = 0; /* the single-state EKF */

@@ -9,7 +9,8 @@
  *
  * Nominal state: position p_IinW (m), velocity v_IinW (m/s), orientation R_ItoW (quaternion w, x,
  * y, z), gyro bias bg (rad/s), accelerometer bias ba (m/s^2); then L clones (p_IinW, R_ItoW), the
- * IMU pose at each of the last L frames, oldest first. World frame: z up, gravity (0, 0, -g).
+ * IMU pose at each of the last L frames (with the keyframe option, at L frames of which the
+ * newest keyframe_recent are the last ones), oldest first. World frame: z up, gravity (0, 0, -g).
  *
  * Error state (15 + 6 L, order SFD_WINDOW_IDX_*, clone i at 15 + 6 i: dp, dtheta):
  *   p = p^ + dp, v = v^ + dv, R = Exp(dtheta) R^ (dtheta in the WORLD frame, "global", unlike the
@@ -31,11 +32,12 @@
  * Per frame (sfd_window_frame): clone the current IMU pose into the window; add the frame's
  * observations (normalized undistorted coordinates, their 2x2 covariance from the pixel noise
  * through the distortion Jacobian, the wire's depth prior); drop the tracks the caller flags;
- * use every track that ended (not seen in this frame) or that reaches the oldest clone of a full
- * window: triangulate it over the clones (bounded Gauss-Newton), project, gate with
- * chi2(rows - 3, 1 - alpha), fold the accepted ones; one update; then marginalize the oldest
- * clone when the window is full. A used or gated track's observations are deleted (each
- * observation informs the filter at most once; a gated one never).
+ * use every track that ended (not seen in this frame) or that starts in the oldest clone of a
+ * full window when that clone leaves: triangulate it over the clones (bounded Gauss-Newton),
+ * project, gate with chi2(rows - 3, 1 - alpha), fold the accepted ones; one update; then
+ * marginalize the oldest clone when the window is full (with keyframes, a middle clone that
+ * moved too little; its observations are deleted unused). A used or gated track's observations are
+ * deleted (each observation informs the filter at most once; a gated one never).
  *
  * Capacities: SFD_MAX_WINDOW clones, SFD_WINDOW_MAX_TRACKS tracks of up to SFD_MAX_WINDOW
  * observations. Overflow is counted and the observation ignored, never written past an array.
