@@ -84,7 +84,7 @@ sfd_status_t PoseOracle::judge(const sfd_frame_t &frame, const double p_IinW_m[3
         std::memcpy(cl.q_ItoW, h.q, sizeof cl.q_ItoW);
         (void)sfd_quat_to_rotmat(h.q, cl.fe_R_ItoW);  // normalized when stored
         cl.utime = h.utime;
-        cl.seq = h.seq;  // as the filter numbers its clones without keyframes: consecutive
+        cl.seq = h.seq;  // consecutive: the oracle keeps the last frames (no keyframes)
     }
     w.next_seq = next_seq_;
     std::memset(w.P, 0, sizeof w.P);

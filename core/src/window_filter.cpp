@@ -587,9 +587,11 @@ int32_t seq_offset(uint32_t s, uint32_t first) {
 }
 
 /// Deletes clone d (0 = the oldest): its rows and columns of P and the observations made in it.
-/// The later clones move down one place and their sequence numbers by one, so a track's
-/// observations stay consecutive in window order (with keyframes the clones are not consecutive
-/// frames; a track seen across a deleted middle clone keeps its other observations).
+/// The later clones move down one place. When the oldest leaves, sequence numbers stay as they
+/// are (consecutive, never reused); when a middle clone leaves (keyframes), the later clones'
+/// numbers drop by one, so a track's observations stay consecutive in window order although the
+/// clones are no longer consecutive frames (a track seen across the deleted clone keeps its
+/// other observations).
 void marginalize_clone(sfd_window_t *w, int d) {
     const int n = dim(*w);
     const uint32_t gone = w->clones[d].seq;
@@ -636,17 +638,14 @@ void marginalize_clone(sfd_window_t *w, int d) {
     if (d > 0) w->next_seq -= 1;
 }
 
-void marginalize_oldest(sfd_window_t *w) {
-    marginalize_clone(w, 0);
-}
-
 /// Mean rotation-compensated parallax (normalized image units) between clones a < b over the
-/// tracks observed in both: |pi(R_CaCb (xb, 1)) - xa| with R_CaCb = R_CtoI^T R_a^T R_b R_CtoI,
-/// the displacement that translation alone explains. Negative when no track joins them.
+/// tracks observed in both: |pi(R_CaCb (xb, 1)) - xa| with R_CaCb = R_WtoCa R_WtoCb^T, the
+/// displacement that translation alone explains. Negative when no track joins them.
 double clone_parallax(const sfd_window_t &w, int a, int b, const sfd_extrinsics_t &ext) {
-    const Mat3 R_CtoI = Eigen::Map<const Mat3>(ext.R_CtoI);
-    const Mat3 R_ab = R_CtoI.transpose() * quat_rot(w.clones[a].q_ItoW).transpose() *
-                      quat_rot(w.clones[b].q_ItoW) * R_CtoI;
+    const sfd_window_clone_t &ca = w.clones[a];
+    const sfd_window_clone_t &cb = w.clones[b];
+    const Mat3 R_ab = cam_pose(quat_rot(ca.q_ItoW), v3(ca.p_IinW_m), ext).R_WtoC *
+                      cam_pose(quat_rot(cb.q_ItoW), v3(cb.p_IinW_m), ext).R_WtoC.transpose();
     const uint32_t sa = w.clones[a].seq;
     const uint32_t sb = w.clones[b].seq;
     double sum = 0.0;
@@ -880,7 +879,7 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
     std::memset(result, 0, offsetof(sfd_window_result_t, gated_ids));
     scratch->track.projected = 0;  // set again by a track of this frame that reaches projection
     flush(w);
-    if (w->num_clones >= w->prm.window) marginalize_oldest(w);  // defensive: invariant
+    if (w->num_clones >= w->prm.window) marginalize_clone(w, 0);  // defensive: invariant
     augment(w, utime);
     w->utime = utime;
     const uint32_t newest = w->clones[w->num_clones - 1].seq;

@@ -55,6 +55,8 @@ static int g_span_max_frames = 0;
 static int g_recent_consecutive = 1;
 /* frames after which no track had its first observation in the oldest clone */
 static int g_oldest_unobserved = 0;
+/* The filter's first clone sequence number in a run (sfd_window_t.next_seq after the start). */
+static uint32_t g_seq_start = 0;
 
 /* Null-space check of a run (g_null_check = 1): the largest relative violations seen. */
 static int g_null_check = 0;
@@ -388,6 +390,7 @@ static void run_flight_from(uint64_t seed, double seconds, int jac, int jump_tra
         }
         assert_status(sfd_window_start_at_rest(&g_w, 1000000, ma, mg), SFD_OK);
     }
+    g_w.next_seq = g_seq_start;
     const int frames = (int)(seconds * 20.0 + 0.5);
     sfd_window_obs_t obs[SFD_WINDOW_MAX_TRACKS];
     sfd_window_result_t res;
@@ -695,6 +698,37 @@ static void keyframes_span_more_motion_and_stay_consistent(void **state) {
     assert_true(gated < 0.02);
 }
 
+/* Clone sequence numbers are compared modulo 2^32 (core/src/window_filter.cpp seq_offset): a
+ * flight whose numbers wrap past UINT32_MAX, with keyframes deleting middle clones (which
+ * renumbers the later clones and tracks), must give a bit-identical filter to the same flight
+ * numbered from 0. Compared as plain integers, a track whose first clone is numbered just below
+ * the wrap would be read as starting after every later clone. */
+static void sequence_numbers_wrap_without_changing_the_filter(void **state) {
+    (void)state;
+    static double P0[SFD_MSCKF_DIM][SFD_MSCKF_DIM];
+    double p0[3], q0[4];
+    run_result_t r;
+    g_keyframe_rad = 0.02;
+    g_span_max_frames = 0;
+    g_seq_start = 0;
+    run_flight(3, 5.0, JAC_OBSERVABILITY, -1, 0, &r);
+    assert_true(g_span_max_frames > 3); /* middle clones left */
+    const uint32_t clones_made = g_w.next_seq;
+    memcpy(P0, g_w.P, sizeof P0);
+    memcpy(p0, g_w.p_IinW_m, sizeof p0);
+    memcpy(q0, g_w.q_ItoW, sizeof q0);
+    g_seq_start = UINT32_MAX - 40u;
+    run_flight(3, 5.0, JAC_OBSERVABILITY, -1, 0, &r);
+    g_seq_start = 0;
+    g_keyframe_rad = 0.0;
+    printf("  %u clone numbers from 0 and from UINT32_MAX - 40 (now %u)\n", clones_made,
+           g_w.next_seq);
+    assert_true(g_w.next_seq == clones_made - 41u); /* wrapped */
+    assert_memory_equal(p0, g_w.p_IinW_m, sizeof p0);
+    assert_memory_equal(q0, g_w.q_ItoW, sizeof q0);
+    assert_memory_equal(P0, g_w.P, sizeof P0);
+}
+
 /* The unobservable directions at the first estimates (translation; yaw about gravity) against
  * the linearized system of a 10 s flight from rest: the accumulated transition of every frame
  * interval must map them onto themselves (Phi N_k = N_k+1) and every projected track's Jacobian
@@ -913,6 +947,7 @@ int main(void) {
         cmocka_unit_test(pose_nees_from_a_start_at_rest),
         cmocka_unit_test(pose_nees_with_ten_times_the_initial_uncertainty),
         cmocka_unit_test(keyframes_span_more_motion_and_stay_consistent),
+        cmocka_unit_test(sequence_numbers_wrap_without_changing_the_filter),
         cmocka_unit_test(unobservable_directions_stay_unobservable),
         cmocka_unit_test(a_jumped_track_is_gated_and_does_not_pull),
         cmocka_unit_test(the_track_test_with_the_filters_covariance_is_calibrated),
