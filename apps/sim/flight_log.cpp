@@ -16,8 +16,11 @@
 // half on structures up to 0.3 x altitude); a track whose point leaves the image is replaced by
 // a new one (new track id). Frames list their tracks in id order (a tracker's creation order).
 // Spurious features (TRUTH spurious = 1, kind[] says which fault):
-//  - paper-uav: each frame, a fraction outlier_ratio / (truth_window - 1) of the tracks get the
-//    paper's fault k(-1, 1)^T (normalized coordinates) added from that frame on (KIND_JUMP);
+//  - paper-uav: each frame, a fraction outlier_ratio / (truth_window - 1) of the tracks take the
+//    paper's fault k(-1, 1)^T (normalized coordinates; -k fx, +k fy px) as a step onto the ground
+//    point under the shifted pixel, followed for good (KIND_JUMP; until 2026-11 the offset was
+//    added to the old point's projection and accumulated, so that observations labelled clean
+//    after the label window matched no static point: apps/sim/SIMULATION.md);
 //  - mistracking: static tracker faults, each kind a third of the labelled observations (events
 //    drawn in inverse proportion to the frames they label): a jump onto another static point
 //    5-30 px away (its own depth, followed for good), a drift of 0.3-2 px per frame for 3-10
@@ -164,7 +167,7 @@ struct Trajectory {
 struct Track {
     double p[3];         // the static point the track follows (m, world)
     int64_t id;          // track id
-    double off_px[2];    // pixel offset from p's projection (paper fault; a drift's slide)
+    double off_px[2];    // pixel offset from p's projection (a drift's slide)
     double drift_px[2];  // drift step (px per frame)
     int drift_left;      // drift steps still to come
     bool mismatch_back;  // a mismatch last frame: the track returns to p in this frame
@@ -492,16 +495,28 @@ int generate_flight(const FlightOptions &opt, FlightSink &sink, FlightStats *sta
             }
             double ou = uv[0], ov = uv[1], odepth = depth;  // this frame's observation
             if (paper) {
-                // The paper's fault k(-1, 1)^T added from the step on (offset accumulates).
-                if (f > 0 && sfd_prng_uniform(&rng) < p_event) {
-                    T.off_px[0] += -opt.fault_magnitude * cam.fx_px;
-                    T.off_px[1] += opt.fault_magnitude * cam.fy_px;
+                // The paper's fault k(-1, 1)^T as a step onto the ground point under the shifted
+                // pixel, followed from then on (the tracker slipped onto other texture): in the
+                // step frame the observation is the old projection plus the fault exactly, later
+                // a consistent track of that point (clean after the label window, as a
+                // mistracking jump). A shifted pixel outside the image loses the track.
+                if (!fresh && f > 0 && sfd_prng_uniform(&rng) < p_event) {
+                    const double target[2] = {uv[0] - opt.fault_magnitude * cam.fx_px,
+                                              uv[1] + opt.fault_magnitude * cam.fy_px};
+                    double q[3], quv[2], qdepth = 0.0;
+                    if (!inside(target, 0.0) || !scene_point(target, q) ||
+                        !project(q, quv, &qdepth)) {
+                        T.lost = true;
+                        continue;
+                    }
+                    std::memcpy(T.p, q, sizeof q);
+                    ou = quv[0];
+                    ov = quv[1];
+                    odepth = qdepth;
                     T.last_step = f;
                     T.last_kind = SFD_TRUTH_T_KIND_JUMP;
                     ++st.events[SFD_TRUTH_T_KIND_JUMP];
                 }
-                ou += T.off_px[0];
-                ov += T.off_px[1];
             } else if (T.mismatch_back) {
                 // Back on its own point after a one-frame mismatch: a step too.
                 T.mismatch_back = false;

@@ -271,7 +271,8 @@ const Scenario kScenarios[] = {
      "  camera, features over 40x40 m; parity test Monte Carlo: P_fa and P_d against the\n"
      "  non-central chi-square, Figure 1 and ROC CSVs (--csv-dir).\n"
      "  Log (-o): the same flight over flat ground, the paper's fault k(-1,1) (normalized)\n"
-     "  added to a track from a step on (--fault-magnitude)."},
+     "  as a step of a track onto the ground point under the shifted pixel, followed from\n"
+     "  then on (--fault-magnitude)."},
     {"mistracking",
      "  Log (-o): 20 m altitude over ground with relief; static tracker faults, each a third\n"
      "  of the spurious observations: jump onto another static point 5-30 px away (own\n"

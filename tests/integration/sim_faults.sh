@@ -11,7 +11,8 @@
 #    an event, 3-10 of them; mismatches 15-60 px away and back the next frame; jumps 5-30 px;
 #  - in 3-D (pixels back-projected with the depth prior and TRUTH): a clean track follows one
 #    static point; a jump or a drift's lock moves the track to another static point; moving
-#    points move at 1-15 m/s;
+#    points move at 1-15 m/s; paper-uav's fault step is exactly k(-1, 1) (normalized: -k fx,
+#    +k fy px) from the old point's projection, onto another static point;
 #  - the first 2 s at rest (TRUTH constant; accel norm = g within noise, gyro = the given bias),
 #    the white noise of gyro and accelerometer = density / sqrt(dt) within 10 %;
 #  - same seed, byte-identical log.
@@ -263,6 +264,46 @@ for sc in ["mistracking", "moving-object"]:
               f"{max(speeds):.2f} m/s")
     print(f"{sc:14s} 3-D: {n_clean} clean steps on one static point, {n_switch} jumps onto "
           f"another static point")
+
+# paper-uav: the paper's fault k(-1, 1) (normalized; -k fx, +k fy px) is a step onto the ground
+# point under the shifted pixel: in the step frame the pixel is the old point's projection plus
+# the fault, and every clean observation is a projection of one static point (until 2026-11 the
+# offset was added to the old point's projection, so clean observations matched no point).
+def project(info, t, pw):
+    """Pixel of world point pw for TRUTH pose t (radtan distortion)."""
+    T = np.array(info.T_imu_cam).reshape(4, 4)
+    c = T[:3, :3].T @ (q_to_R(t.orientation).T @ (np.asarray(pw) - np.array(t.position)) -
+                       T[:3, 3])
+    x, y = c[0] / c[2], c[1] / c[2]
+    k1, k2, p1, p2 = info.distortion
+    r2 = x * x + y * y
+    rad = 1 + k1 * r2 + k2 * r2 * r2
+    xd = x * rad + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+    yd = y * rad + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+    return info.fx * xd + info.cx, info.fy * yd + info.cy
+
+
+K_FAULT = 0.02  # --fault-magnitude default
+log = logs["paper-uav"]
+info, frames = log["info"], log["frames"]
+n_clean = n_step = 0
+for tid, obs in tracks(log).items():
+    pts = [(o[0], backproject(info, frames[o[0]][0], o[1], o[2], o[3]), o[4], o[1], o[2])
+           for o in obs]
+    for a, b in zip(pts, pts[1:]):
+        if b[0] != a[0] + 1:
+            continue
+        if a[2] == CLEAN and b[2] == CLEAN:
+            assert np.linalg.norm(b[1] - a[1]) < 1e-4, ("paper-uav", tid, a, b)
+            n_clean += 1
+        elif a[2] == CLEAN and b[2] == JUMP:
+            u, v = project(info, frames[b[0]][0], a[1])
+            assert abs(b[3] - u + K_FAULT * info.fx) < 1e-3, ("paper-uav", tid, b, u)
+            assert abs(b[4] - v - K_FAULT * info.fy) < 1e-3, ("paper-uav", tid, b, v)
+            n_step += 1
+assert n_clean > 1000 and n_step > 100, (n_clean, n_step)
+print(f"paper-uav      3-D: {n_clean} clean steps on one static point, {n_step} fault steps of "
+      f"exactly ({-K_FAULT * info.fx:.2f}, {K_FAULT * info.fy:.2f}) px")
 
 # IMU at rest with the given biases.
 log = load(f"{d}/imu.lcmlog")
