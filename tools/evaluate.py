@@ -379,9 +379,12 @@ def plots(a, rows, ref, grid):
     ncol = min(3, len(scs))
     nrow = (len(scs) + ncol - 1) // ncol
     legend_kw = dict(loc="lower center", ncol=len(a.methods), frameon=False)
+    # At least 9.2 in wide, so that the title and a one-row legend of every method fit when the
+    # sweep has one or two scenarios (a 4.6 in figure cut both).
+    fig_w = max(4.6 * ncol, 9.2)
 
     # Precision vs strict recall along the alpha sweep (pooled over seeds).
-    fig, axs = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 4.2 * nrow + 0.9), squeeze=False)
+    fig, axs = plt.subplots(nrow, ncol, figsize=(fig_w, 4.2 * nrow + 0.9), squeeze=False)
     other = {k: v for k, v in ref.items() if k != "alpha"}
     alphas = grid.get("alpha", [ref.get("alpha")])
     for ax, sc in zip(axs.flat, scs):
@@ -432,7 +435,7 @@ def plots(a, rows, ref, grid):
     plt.close(fig)
 
     # Recall per fault kind (pooled over seeds; error bar: sd of the per-run recall).
-    fig, axs = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 3.8 * nrow + 0.9), squeeze=False)
+    fig, axs = plt.subplots(nrow, ncol, figsize=(fig_w, 3.8 * nrow + 0.9), squeeze=False)
     for ax, sc in zip(axs.flat, scs):
         r0 = at_ref(rows, dict(ref, scenario=sc))
         kinds = [k for k in KINDS if sum(r["%s_spurious" % k] or 0 for r in r0)]
