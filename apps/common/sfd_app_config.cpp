@@ -589,6 +589,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                      {"consider_position", &nv.consider_position},
                      {"window_filter", &nv.window_filter},
                      {"window_size", &nv.window_size},
+                     {"window_depth_priors", &nv.window_depth_priors},
                      {"first_estimates", &nv.first_estimates},
                      {"observability_constrained", &nv.observability_constrained}};
         std::set<std::string> fknown = {"init_accel_bias_m_s2"};
@@ -771,6 +772,7 @@ bool validate(const AppConfig &cfg, std::string *error) {
     c.positive("filter.gravity_m_s2", nz.gravity_m_s2);
     c.flag("filter.window_filter", nv.window_filter);
     c.integer("filter.window_size", nv.window_size, 2, SFD_MAX_WINDOW);
+    c.integer("filter.window_depth_priors", nv.window_depth_priors, 0, 2);
     c.open_interval("filter.window_gate_alpha", nv.window_gate_alpha, 0.0, 0.5, true);
     c.flag("filter.first_estimates", nv.first_estimates);
     c.flag("filter.observability_constrained", nv.observability_constrained);

@@ -31,6 +31,7 @@ void sfd_nav_config_default(sfd_nav_config_t *cfg) {
     }
     cfg->window_filter = 1;
     cfg->window_size = SFD_MAX_WINDOW;
+    cfg->window_depth_priors = 2;
     cfg->window_gate_alpha = 0.01;
     cfg->first_estimates = 0;
     cfg->observability_constrained = 1;
@@ -74,6 +75,7 @@ sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd
     if ((cfg->window_filter != 0 && cfg->window_filter != 1) ||
         (cfg->first_estimates != 0 && cfg->first_estimates != 1) ||
         (cfg->observability_constrained != 0 && cfg->observability_constrained != 1) ||
+        (cfg->window_depth_priors < 0 || cfg->window_depth_priors > 2) ||
         !(cfg->keyframe_parallax_rad >= 0.0 && isfinite(cfg->keyframe_parallax_rad))) {
         return SFD_ERR_INVAL;
     }
@@ -86,6 +88,7 @@ sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd
         wp.gate_alpha = cfg->window_gate_alpha;
         wp.first_estimates = cfg->first_estimates;
         wp.observability_constrained = cfg->observability_constrained;
+        wp.use_depth_prior = cfg->window_depth_priors;
         /* Keyframes keep the parity test's older window_frames - 1 frames as the newest clones
          * (it tests every frame against them). */
         wp.keyframe_parallax_rad = cfg->keyframe_parallax_rad;

@@ -91,7 +91,7 @@ bool params_valid(const sfd_window_params_t &p) {
     return p.window >= 2 && p.window <= SFD_MAX_WINDOW && p.min_observations >= 2 &&
            p.min_observations <= p.window && p.gate_alpha > 0.0 && p.gate_alpha <= 0.5 &&
            p.min_depth_m > 0.0 && p.max_depth_m > p.min_depth_m && std::isfinite(p.max_depth_m) &&
-           (p.use_depth_prior == 0 || p.use_depth_prior == 1) && p.depth_var_floor_m2 > 0.0 &&
+           p.use_depth_prior >= 0 && p.use_depth_prior <= 2 && p.depth_var_floor_m2 > 0.0 &&
            std::isfinite(p.depth_var_floor_m2) && p.gauss_newton_iterations >= 1 &&
            p.gauss_newton_iterations <= 20 && (p.first_estimates == 0 || p.first_estimates == 1) &&
            (p.observability_constrained == 0 || p.observability_constrained == 1) &&
@@ -283,9 +283,10 @@ bool spd_solve3(const Mat3 &H, const Vec3 &g, Vec3 *x) {
 /// whitened reprojection errors plus the depth prior. False when the point is not finite or not
 /// within [min_depth_m, max_depth_m] in front of every clone.
 /// The depth prior is that of observation @p depth_k (the window's tracks: 0, the first; the
-/// detection test, sfd_window_test_track: the newest).
+/// detection test, sfd_window_test_track: the newest); with @p last_row the window's track adds
+/// its newest observation's prior (depth_last_m) as a second row.
 bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPose *pose,
-                 bool depth_row, int depth_k, Vec3 *p_out) {
+                 bool depth_row, int depth_k, Vec3 *p_out, bool last_row = false) {
     Vec3 p;
     if (depth_row) {
         // The depth prior is a measurement of the point; the rays' point is not, at low parallax
@@ -332,6 +333,15 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
             const Vec3 J = pose[depth_k].R_WtoC.row(2).transpose();
             H += J * J.transpose() / var_d;
             g += J * (static_cast<double>(t.depth_m) - pc.z()) / var_d;
+        }
+        if (last_row) {
+            const int kl = t.used - 1;
+            const double var_l =
+                static_cast<double>(t.depth_last_var_m2) + w.prm.depth_var_floor_m2;
+            const Vec3 pc = pose[kl].R_WtoC * (p - pose[kl].p_CinW);
+            const Vec3 J = pose[kl].R_WtoC.row(2).transpose();
+            H += J * J.transpose() / var_l;
+            g += J * (static_cast<double>(t.depth_last_m) - pc.z()) / var_l;
         }
         Vec3 dp;
         if (!spd_solve3(H, g, &dp)) return false;
@@ -418,13 +428,18 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
         }
         fej[k] = cam_pose(R_fe[k], p_fe[k], ext);
     }
-    const bool depth_row = w->prm.use_depth_prior && t.depth_m > 0.0F && std::isfinite(t.depth_m);
+    // Depth priors (core/docs/window_filter.md "Depth priors"): the first observation's, and with
+    // use_depth_prior 2 the newest's (another frame's measurement of the same point).
+    const bool depth_row =
+        w->prm.use_depth_prior >= 1 && t.depth_m > 0.0F && std::isfinite(t.depth_m);
+    const bool last_row = w->prm.use_depth_prior >= 2 && t.used >= 2 && t.depth_last_m > 0.0F &&
+                          std::isfinite(t.depth_last_m);
     Vec3 pf;
-    if (!triangulate(*w, t, cur, depth_row, 0, &pf)) return TrackOutcome::kNoGeometry;
+    if (!triangulate(*w, t, cur, depth_row, 0, &pf, last_row)) return TrackOutcome::kNoGeometry;
 
     sfd_msckf_track_t &tr = scratch->track;
     const int n = dim(*w);
-    const int rows = 2 * t.used + (depth_row ? 1 : 0);
+    const int rows = 2 * t.used + (depth_row ? 1 : 0) + (last_row ? 1 : 0);
     tr.rows = rows;
     tr.n = n;
     tr.projected = 0;
@@ -491,6 +506,19 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
         tr.r[r] = static_cast<double>(t.depth_m) - pc.z();
         tr.R[r][r] = static_cast<double>(t.depth_var_m2) + w->prm.depth_var_floor_m2;
     }
+    if (last_row) {
+        const int r = 2 * t.used + (depth_row ? 1 : 0);
+        const int kl = t.used - 1;
+        const Vec3 pc = cur[kl].R_WtoC * (pf - cur[kl].p_CinW);
+        const int col = kImu + 6 * (c0 + kl);
+        for (int j = 0; j < 3; ++j) {
+            tr.Hx[r][col + j] = -fej[kl].R_WtoC(2, j);
+            tr.Hx[r][col + 3 + j] = dth[kl](2, j);
+            tr.Hf[r][j] = fej[kl].R_WtoC(2, j);
+        }
+        tr.r[r] = static_cast<double>(t.depth_last_m) - pc.z();
+        tr.R[r][r] = static_cast<double>(t.depth_last_var_m2) + w->prm.depth_var_floor_m2;
+    }
     // The gate (3) from the unprojected track, as sfd_window_test_track computes it: S = H_x P
     // H_x^T + R from the 6x6 blocks of P the clones' rows touch, gamma by the least-squares
     // identity (sfd_msckf_track_statistic; equal to projecting, then sfd_msckf_track_gate). The
@@ -499,7 +527,8 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
     double hp[SFD_MSCKF_TRACK_ROWS][6];
     int cols[SFD_MAX_WINDOW][2];
     int frame_rows[SFD_MAX_WINDOW][3];
-    int frame_nrows[SFD_MAX_WINDOW];
+    int frame_nrows[SFD_MAX_WINDOW] =
+        {};  // set below for every observation; zeroed for the analyzer
     for (int k = 0; k < t.used; ++k) {
         const int col = kImu + 6 * (c0 + k);
         cols[k][0] = col;
@@ -515,6 +544,12 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
         const int r = 2 * t.used;
         frame_rows[0][frame_nrows[0]++] = r;
         for (int j = 0; j < 6; ++j) hp[r][j] = tr.Hx[r][kImu + 6 * c0 + j];
+    }
+    if (last_row) {
+        const int r = 2 * t.used + (depth_row ? 1 : 0);
+        const int kl = t.used - 1;
+        frame_rows[kl][frame_nrows[kl]++] = r;
+        for (int j = 0; j < 6; ++j) hp[r][j] = tr.Hx[r][kImu + 6 * (c0 + kl) + j];
     }
     for (int i = 0; i < rows; ++i) {
         for (int j = 0; j < rows; ++j) S[i][j] = tr.R[i][j];
@@ -611,6 +646,7 @@ void marginalize_clone(sfd_window_t *w, int d) {
             t.xn[i - 1][1] = t.xn[i][1];
             for (int e = 0; e < 3; ++e) t.cov_xn[i - 1][e] = t.cov_xn[i][e];
         }
+        if (j == t.used - 1) t.depth_last_m = 0.0F;  // the newest observation's prior goes with it
         t.used -= 1;
         if (j == 0) {
             t.depth_m = 0.0F;
@@ -705,7 +741,7 @@ extern "C" sfd_status_t sfd_window_params_default(sfd_window_params_t *params) {
     params->gate_alpha = 0.01;
     params->min_depth_m = 0.1;
     params->max_depth_m = 1e4;
-    params->use_depth_prior = 1;
+    params->use_depth_prior = 2;
     params->depth_var_floor_m2 = 1e-4;
     params->gauss_newton_iterations = 5;
     params->first_estimates = 0;
@@ -932,6 +968,10 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
         }
         t->used = u + 1;
         t->seen = 1;
+        // the newest observation's prior (a prior float can hold, or none)
+        const bool last = o.depth_m > 0.0 && depth_prior_fits_float(o.depth_m, o.depth_var_m2);
+        t->depth_last_m = last ? static_cast<float>(o.depth_m) : 0.0F;
+        t->depth_last_var_m2 = last ? static_cast<float>(o.depth_var_m2) : 0.0F;
         result->added++;
     }
 
@@ -1079,7 +1119,7 @@ sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
         }
     }
     // a prior float can hold, as the window's tracks keep it (core_private.hpp)
-    const bool depth_row = w->prm.use_depth_prior && obs->depth_m > 0.0 &&
+    const bool depth_row = w->prm.use_depth_prior >= 1 && obs->depth_m > 0.0 &&
                            depth_prior_fits_float(obs->depth_m, obs->depth_var_m2);
     t.depth_m = depth_row ? static_cast<float>(obs->depth_m) : 0.0F;
     t.depth_var_m2 = depth_row ? static_cast<float>(obs->depth_var_m2) : 0.0F;

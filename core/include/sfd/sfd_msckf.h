@@ -43,8 +43,8 @@ extern "C" {
 
 /** Largest error-state dimension: 15 IMU error states and 6 per clone of a full window. */
 #define SFD_MSCKF_DIM (15 + 6 * SFD_MAX_WINDOW)
-/** Largest number of rows of one track: 2 per clone and one depth prior. */
-#define SFD_MSCKF_TRACK_ROWS (2 * SFD_MAX_WINDOW + 1)
+/** Largest number of rows of one track: 2 per clone and two depth priors (first and newest). */
+#define SFD_MSCKF_TRACK_ROWS (2 * SFD_MAX_WINDOW + 2)
 
 /** One track's linearized residual (1), then (after sfd_msckf_track_project) its projection (2).
  *  Caller-owned; fill rows, n, Hx, Hf, r and R, rows and columns beyond them are not read. */

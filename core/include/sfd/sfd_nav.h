@@ -37,14 +37,17 @@ extern "C" {
 
 /** Configuration of the navigation side (YAML section `filter`, apps/config/sfd.yaml). */
 typedef struct {
-    int32_t enabled;          /**< 1: run the EKF (required by oprf, ransac1, ransacf, both) */
-    int32_t window_filter;    /**< 1: the sliding-window filter (sfd_window.h), started when
-                                   rest is detected (sfd_rest.h); 0: the single-state EKF
-                                   with self-built landmarks (sfd_ekf.h, older) */
-    int32_t window_size;      /**< clones L of the window filter, 2..SFD_MAX_WINDOW */
-    double window_gate_alpha; /**< false-alarm rate of its per-track chi-square gate */
-    int32_t first_estimates;  /**< window filter: 1 first-estimate Jacobians (overrides the
-                                   next), 0 current estimates */
+    int32_t enabled;             /**< 1: run the EKF (required by oprf, ransac1, ransacf, both) */
+    int32_t window_filter;       /**< 1: the sliding-window filter (sfd_window.h), started when
+                                      rest is detected (sfd_rest.h); 0: the single-state EKF
+                                      with self-built landmarks (sfd_ekf.h, older) */
+    int32_t window_size;         /**< clones L of the window filter, 2..SFD_MAX_WINDOW */
+    int32_t window_depth_priors; /**< window filter: a track's depth priors used as measurements:
+                                      0 none, 1 the first observation's, 2 also the newest's
+                                      (default; sfd_window_params_t.use_depth_prior) */
+    double window_gate_alpha;    /**< false-alarm rate of its per-track chi-square gate */
+    int32_t first_estimates;     /**< window filter: 1 first-estimate Jacobians (overrides the
+                                      next), 0 current estimates */
     int32_t observability_constrained; /**< window filter, first_estimates 0: 1 current-estimate
                                             Jacobians with the observability constraint (the
                                             default), 0 without (core/docs/window_filter.md) */

@@ -79,7 +79,10 @@ typedef struct {
     double gate_alpha;        /**< false-alarm rate of a consistent track's gate, (0, 0.5] (0.01) */
     double min_depth_m;       /**< a triangulated point closer to any clone is refused (0.1) */
     double max_depth_m;       /**< or farther (1e4) */
-    int32_t use_depth_prior;  /**< 1: the first observation's depth prior is a measurement (1) */
+    int32_t use_depth_prior;  /**< depth priors of a track that are measurements: 0 none; 1 the
+                                   first observation's; 2 the first and the newest observation's
+                                   (2, the default; the wire's depth noise taken as independent
+                                   between frames, core/docs/window_filter.md "Depth priors") */
     double depth_var_floor_m2;       /**< added to the wire's depth variance (1e-4) */
     int32_t gauss_newton_iterations; /**< triangulation steps, 1..20 (5) */
     int32_t first_estimates;         /**< 1: first-estimate Jacobians (an option: over-confident in
@@ -134,6 +137,8 @@ typedef struct {
     int32_t used;         /**< observations held (consecutive clones from first_clone) */
     uint32_t first_clone; /**< sequence number of the clone of observation 0 */
     int32_t seen;         /**< 1: observed in the newest frame */
+    float depth_last_m;   /**< depth prior of the newest observation, <= 0: none (with
+                               depth_last_var_m2 at the end: both in what was padding) */
     int64_t id;
     float depth_m; /**< depth prior of observation 0, <= 0: none (float: one beyond float's
                         range, or with a variance beyond it, is none) */
@@ -143,6 +148,7 @@ typedef struct {
      *  is refused) and used in double */
     float xn[SFD_MAX_WINDOW][2];
     float cov_xn[SFD_MAX_WINDOW][3];
+    float depth_last_var_m2; /**< its variance (m^2) */
 } sfd_window_track_t;
 
 typedef struct {
