@@ -768,8 +768,8 @@ static void sequence_numbers_wrap_without_changing_the_filter(void **state) {
     run_flight(3, 5.0, JAC_OBSERVABILITY, -1, 0, &r);
     g_seq_start = 0;
     g_keyframe_rad = 0.0;
-    printf("  %u clone numbers from 0 and from UINT32_MAX - 40 (now %u)\n", clones_made,
-           g_w.next_seq);
+    printf("  %lu clone numbers from 0 and from UINT32_MAX - 40 (now %lu)\n",
+           (unsigned long)clones_made, (unsigned long)g_w.next_seq);
     assert_true(g_w.next_seq == clones_made - 41u); /* wrapped */
     assert_memory_equal(p0, g_w.p_IinW_m, sizeof p0);
     assert_memory_equal(q0, g_w.q_ItoW, sizeof q0);
