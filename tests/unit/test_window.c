@@ -596,6 +596,14 @@ static void monte_carlo(uint64_t seed0, int at_rest, int jac, monte_carlo_t *mc)
     }
 }
 
+/* The 95 % band of the mean NEES of a 3-dof block over RUNS runs: chi2(3 RUNS) / RUNS. */
+static void nees_band(double *lo, double *hi) {
+    assert_status(sfd_chi2_quantile_upper(0.975, 3 * RUNS, lo), SFD_OK);
+    assert_status(sfd_chi2_quantile_upper(0.025, 3 * RUNS, hi), SFD_OK);
+    *lo /= RUNS;
+    *hi /= RUNS;
+}
+
 /* The sum over RUNS runs of the position NEES at the end is chi2(3 RUNS) for a consistent
  * filter, the attitude's too. Every Jacobian choice is printed; the default (observability
  * constraint) must be inside the 95 % band for both, and its mean errors no worse than the
@@ -604,10 +612,7 @@ static void monte_carlo(uint64_t seed0, int at_rest, int jac, monte_carlo_t *mc)
  * -0.4 % +- 1.1 % under way and +0.8 % +- 2.2 % from rest, paired; core/docs/window_filter.md). */
 static void nees_check(uint64_t seed0, int at_rest) {
     double lo = 0.0, hi = 0.0;
-    assert_status(sfd_chi2_quantile_upper(0.975, 3 * RUNS, &lo), SFD_OK);
-    assert_status(sfd_chi2_quantile_upper(0.025, 3 * RUNS, &hi), SFD_OK);
-    lo /= RUNS;
-    hi /= RUNS;
+    nees_band(&lo, &hi);
     monte_carlo_t mc[3];
     for (int jac = 0; jac < 3; ++jac) {
         monte_carlo(seed0, at_rest, jac, &mc[jac]);
@@ -680,10 +685,7 @@ static void keyframes_span_more_motion_and_stay_consistent(void **state) {
     g_span_max_frames = 0;
     g_oldest_unobserved = 0;
     double lo = 0.0, hi = 0.0;
-    assert_status(sfd_chi2_quantile_upper(0.975, 3 * RUNS, &lo), SFD_OK);
-    assert_status(sfd_chi2_quantile_upper(0.025, 3 * RUNS, &hi), SFD_OK);
-    lo /= RUNS;
-    hi /= RUNS;
+    nees_band(&lo, &hi);
     monte_carlo_t mc;
     monte_carlo(100, 0, JAC_OBSERVABILITY, &mc);
     g_keyframe_rad = 0.0;
@@ -720,10 +722,7 @@ static void the_newest_depth_prior_is_a_second_measurement(void **state) {
     (void)state;
     SFD_REQ("issue16.nees_band");
     double lo = 0.0, hi = 0.0;
-    assert_status(sfd_chi2_quantile_upper(0.975, 3 * RUNS, &lo), SFD_OK);
-    assert_status(sfd_chi2_quantile_upper(0.025, 3 * RUNS, &hi), SFD_OK);
-    lo /= RUNS;
-    hi /= RUNS;
+    nees_band(&lo, &hi);
     monte_carlo_t mc[2];
     g_depth_sd_m = 0.02;
     for (int k = 0; k < 2; ++k) {
