@@ -276,25 +276,51 @@ bool spd_solve3(const Mat3 &H, const Vec3 &g, Vec3 *x) {
     return true;
 }
 
-/// Triangulates a track over its clones (current estimates): from the depth prior's point when
-/// the track has one, else from the linear least-squares point of the rays
+/// One depth-prior row of a track's residual (core/docs/window_filter.md "Depth priors"): the
+/// prior of observation k, depth along that camera's optical axis (m) with variance var_m2 (the
+/// wire's plus depth_var_floor_m2).
+struct DepthRow {
+    int k;
+    double depth_m;
+    double var_m2;
+};
+constexpr int kMaxDepthRows = 2;
+
+/// The window's depth rows of track t: observation 0's prior (use_depth_prior >= 1) and the
+/// newest observation's (use_depth_prior 2, another frame's measurement of the same point), each
+/// when the track has it. Returns their number (0..kMaxDepthRows).
+int window_depth_rows(const sfd_window_t &w, const sfd_window_track_t &t,
+                      DepthRow (&rows)[kMaxDepthRows]) {
+    int nd = 0;
+    if (w.prm.use_depth_prior >= 1 && t.depth_m > 0.0F && std::isfinite(t.depth_m)) {
+        rows[nd++] = {0, static_cast<double>(t.depth_m),
+                      static_cast<double>(t.depth_var_m2) + w.prm.depth_var_floor_m2};
+    }
+    if (w.prm.use_depth_prior >= 2 && t.used >= 2 && t.depth_last_m > 0.0F &&
+        std::isfinite(t.depth_last_m)) {
+        rows[nd++] = {t.used - 1, static_cast<double>(t.depth_last_m),
+                      static_cast<double>(t.depth_last_var_m2) + w.prm.depth_var_floor_m2};
+    }
+    return nd;
+}
+
+/// Triangulates a track over its clones (current estimates): from the point of its first depth
+/// row when it has one (the window's tracks: observation 0's prior, else the newest's), else
+/// from the linear least-squares point of the rays
 /// (sum_k (I - b_k b_k^T)) p = sum_k (I - b_k b_k^T) c_k (refused when they are nearly parallel),
-/// then at most gauss_newton_iterations Gauss-Newton steps on the
-/// whitened reprojection errors plus the depth prior. False when the point is not finite or not
-/// within [min_depth_m, max_depth_m] in front of every clone.
-/// The depth prior is that of observation @p depth_k (the window's tracks: 0, the first; the
-/// detection test, sfd_window_test_track: the newest); with @p last_row the window's track adds
-/// its newest observation's prior (depth_last_m) as a second row.
+/// then at most gauss_newton_iterations Gauss-Newton steps on the whitened reprojection errors
+/// plus the nd depth rows. False when the point is not finite or not within
+/// [min_depth_m, max_depth_m] in front of every clone.
 bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPose *pose,
-                 bool depth_row, int depth_k, Vec3 *p_out, bool last_row = false) {
+                 const DepthRow *dr, int nd, Vec3 *p_out) {
     Vec3 p;
-    if (depth_row) {
+    if (nd > 0) {
         // The depth prior is a measurement of the point; the rays' point is not, at low parallax
         // (its depth is then set by the pixel noise, and Gauss-Newton from there may stop far
         // from the optimum, which biases the linearization): start from the prior.
-        p = pose[depth_k].p_CinW +
-            pose[depth_k].R_WtoC.transpose() *
-                (static_cast<double>(t.depth_m) * Vec3(t.xn[depth_k][0], t.xn[depth_k][1], 1.0));
+        const int k0 = dr[0].k;
+        p = pose[k0].p_CinW +
+            pose[k0].R_WtoC.transpose() * (dr[0].depth_m * Vec3(t.xn[k0][0], t.xn[k0][1], 1.0));
     } else {
         // The rays' least-squares point: A p = b with A = sum (I - u u^T) over the unit rays u.
         Mat3 A = Mat3::Zero();
@@ -313,7 +339,6 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
         p = A.ldlt().solve(b);
     }
     if (!all_finite(p.data(), 3)) return false;
-    const double var_d = static_cast<double>(t.depth_var_m2) + w.prm.depth_var_floor_m2;
     for (int it = 0; it < w.prm.gauss_newton_iterations; ++it) {
         Mat3 H = Mat3::Zero();
         Vec3 g = Vec3::Zero();
@@ -328,20 +353,12 @@ bool triangulate(const sfd_window_t &w, const sfd_window_track_t &t, const CamPo
             H += J.transpose() * W * J;
             g += J.transpose() * W * r;
         }
-        if (depth_row) {
-            const Vec3 pc = pose[depth_k].R_WtoC * (p - pose[depth_k].p_CinW);
-            const Vec3 J = pose[depth_k].R_WtoC.row(2).transpose();
-            H += J * J.transpose() / var_d;
-            g += J * (static_cast<double>(t.depth_m) - pc.z()) / var_d;
-        }
-        if (last_row) {
-            const int kl = t.used - 1;
-            const double var_l =
-                static_cast<double>(t.depth_last_var_m2) + w.prm.depth_var_floor_m2;
-            const Vec3 pc = pose[kl].R_WtoC * (p - pose[kl].p_CinW);
-            const Vec3 J = pose[kl].R_WtoC.row(2).transpose();
-            H += J * J.transpose() / var_l;
-            g += J * (static_cast<double>(t.depth_last_m) - pc.z()) / var_l;
+        for (int i = 0; i < nd; ++i) {
+            const int k = dr[i].k;
+            const Vec3 pc = pose[k].R_WtoC * (p - pose[k].p_CinW);
+            const Vec3 J = pose[k].R_WtoC.row(2).transpose();
+            H += J * J.transpose() / dr[i].var_m2;
+            g += J * (dr[i].depth_m - pc.z()) / dr[i].var_m2;
         }
         Vec3 dp;
         if (!spd_solve3(H, g, &dp)) return false;
@@ -428,18 +445,14 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
         }
         fej[k] = cam_pose(R_fe[k], p_fe[k], ext);
     }
-    // Depth priors (core/docs/window_filter.md "Depth priors"): the first observation's, and with
-    // use_depth_prior 2 the newest's (another frame's measurement of the same point).
-    const bool depth_row =
-        w->prm.use_depth_prior >= 1 && t.depth_m > 0.0F && std::isfinite(t.depth_m);
-    const bool last_row = w->prm.use_depth_prior >= 2 && t.used >= 2 && t.depth_last_m > 0.0F &&
-                          std::isfinite(t.depth_last_m);
+    DepthRow dr[kMaxDepthRows];
+    const int nd = window_depth_rows(*w, t, dr);
     Vec3 pf;
-    if (!triangulate(*w, t, cur, depth_row, 0, &pf, last_row)) return TrackOutcome::kNoGeometry;
+    if (!triangulate(*w, t, cur, dr, nd, &pf)) return TrackOutcome::kNoGeometry;
 
     sfd_msckf_track_t &tr = scratch->track;
     const int n = dim(*w);
-    const int rows = 2 * t.used + (depth_row ? 1 : 0) + (last_row ? 1 : 0);
+    const int rows = 2 * t.used + nd;
     tr.rows = rows;
     tr.n = n;
     tr.projected = 0;
@@ -494,30 +507,18 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
         tr.R[rv][ru] = t.cov_xn[k][1];
         tr.R[rv][rv] = t.cov_xn[k][2];
     }
-    if (depth_row) {
-        const int r = 2 * t.used;
-        const Vec3 pc = cur[0].R_WtoC * (pf - cur[0].p_CinW);
-        const int col = kImu + 6 * c0;
+    for (int i = 0; i < nd; ++i) {  // the depth rows: d z / d(p_I, theta, p_f) at clone k
+        const int r = 2 * t.used + i;
+        const int k = dr[i].k;
+        const Vec3 pc = cur[k].R_WtoC * (pf - cur[k].p_CinW);
+        const int col = kImu + 6 * (c0 + k);
         for (int j = 0; j < 3; ++j) {
-            tr.Hx[r][col + j] = -fej[0].R_WtoC(2, j);
-            tr.Hx[r][col + 3 + j] = dth[0](2, j);
-            tr.Hf[r][j] = fej[0].R_WtoC(2, j);
+            tr.Hx[r][col + j] = -fej[k].R_WtoC(2, j);
+            tr.Hx[r][col + 3 + j] = dth[k](2, j);
+            tr.Hf[r][j] = fej[k].R_WtoC(2, j);
         }
-        tr.r[r] = static_cast<double>(t.depth_m) - pc.z();
-        tr.R[r][r] = static_cast<double>(t.depth_var_m2) + w->prm.depth_var_floor_m2;
-    }
-    if (last_row) {
-        const int r = 2 * t.used + (depth_row ? 1 : 0);
-        const int kl = t.used - 1;
-        const Vec3 pc = cur[kl].R_WtoC * (pf - cur[kl].p_CinW);
-        const int col = kImu + 6 * (c0 + kl);
-        for (int j = 0; j < 3; ++j) {
-            tr.Hx[r][col + j] = -fej[kl].R_WtoC(2, j);
-            tr.Hx[r][col + 3 + j] = dth[kl](2, j);
-            tr.Hf[r][j] = fej[kl].R_WtoC(2, j);
-        }
-        tr.r[r] = static_cast<double>(t.depth_last_m) - pc.z();
-        tr.R[r][r] = static_cast<double>(t.depth_last_var_m2) + w->prm.depth_var_floor_m2;
+        tr.r[r] = dr[i].depth_m - pc.z();
+        tr.R[r][r] = dr[i].var_m2;
     }
     // The gate (3) from the unprojected track, as sfd_window_test_track computes it: S = H_x P
     // H_x^T + R from the 6x6 blocks of P the clones' rows touch, gamma by the least-squares
@@ -540,16 +541,11 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
             for (int j = 0; j < 6; ++j) hp[r][j] = tr.Hx[r][col + j];
         }
     }
-    if (depth_row) {
-        const int r = 2 * t.used;
-        frame_rows[0][frame_nrows[0]++] = r;
-        for (int j = 0; j < 6; ++j) hp[r][j] = tr.Hx[r][kImu + 6 * c0 + j];
-    }
-    if (last_row) {
-        const int r = 2 * t.used + (depth_row ? 1 : 0);
-        const int kl = t.used - 1;
-        frame_rows[kl][frame_nrows[kl]++] = r;
-        for (int j = 0; j < 6; ++j) hp[r][j] = tr.Hx[r][kImu + 6 * (c0 + kl) + j];
+    for (int i = 0; i < nd; ++i) {
+        const int r = 2 * t.used + i;
+        const int k = dr[i].k;
+        frame_rows[k][frame_nrows[k]++] = r;
+        for (int j = 0; j < 6; ++j) hp[r][j] = tr.Hx[r][kImu + 6 * (c0 + k) + j];
     }
     for (int i = 0; i < rows; ++i) {
         for (int j = 0; j < rows; ++j) S[i][j] = tr.R[i][j];
@@ -1140,9 +1136,13 @@ sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
         cols[k][0] = cp;
         cols[k][1] = ct;
     }
+    // The newest observation's prior, the one depth row of the test.
     const int dk = m - 1;
+    const DepthRow dr[1] = {{dk, static_cast<double>(t.depth_m),
+                             static_cast<double>(t.depth_var_m2) + w->prm.depth_var_floor_m2}};
+    const int nd = depth_row ? 1 : 0;
     Vec3 pf;
-    if (!triangulate(*w, t, pose, depth_row, dk, &pf)) return SFD_ERR_NUMERIC;
+    if (!triangulate(*w, t, pose, dr, nd, &pf)) return SFD_ERR_NUMERIC;
     // Row i of the residual depends on one frame's pose through the 6-vector hp[i] (dp, dtheta)
     // and on the point through Hf. S = H_x P H_x^T + R is formed from the 6x6 blocks of P that
     // each pair of frames touches (H_x is block sparse), in the scratch track's R; the track's
@@ -1196,8 +1196,8 @@ sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
             hp[r][3 + j] = dth(2, j);
             tr.Hf[r][j] = pose[dk].R_WtoC(2, j);
         }
-        tr.r[r] = static_cast<double>(t.depth_m) - pc.z();
-        S[r][r] = static_cast<double>(t.depth_var_m2) + w->prm.depth_var_floor_m2;
+        tr.r[r] = dr[0].depth_m - pc.z();
+        S[r][r] = dr[0].var_m2;
     }
     add_pose_covariance(*w, m, cols, hp, frame_rows, frame_nrows, S);
     // The rows of the newest `inner` frames are the last ones (the depth row, when there is one,

@@ -744,6 +744,54 @@ static void the_newest_depth_prior_is_a_second_measurement(void **state) {
     assert_true(mc[1].pos_err_m < mc[0].pos_err_m);
 }
 
+/* A track whose first observation carries no depth prior (the wire gave none, or with keyframes
+ * the observation left with its clone) starts its triangulation from its newest observation's
+ * prior (core/src/window_filter.cpp triangulate): with a hovering camera the rays are parallel,
+ * and a track that started from them would be refused for lack of geometry although the newest
+ * prior places its point. Without any prior the same tracks are refused. */
+static void a_track_without_its_first_prior_starts_from_its_newest(void **state) {
+    (void)state;
+    enum { kTracks = 20, kFrames = 4 };
+    sfd_extrinsics_t ext;
+    extrinsics(&ext);
+    for (int with_prior = 0; with_prior < 2; ++with_prior) {
+        sfd_window_params_t prm;
+        assert_status(sfd_window_params_default(&prm), SFD_OK);
+        assert_int_equal(prm.use_depth_prior, 2);
+        assert_status(sfd_window_init(&g_w, &prm), SFD_OK);
+        const double z[3] = {0, 0, 0}, q[4] = {1, 0, 0, 0};
+        assert_status(sfd_window_start_at(&g_w, 0, z, z, q, z, z), SFD_OK);
+        sfd_window_obs_t obs[kTracks];
+        sfd_window_result_t res;
+        for (int f = 1; f <= kFrames + 1; ++f) {
+            memset(obs, 0, sizeof obs);
+            for (int i = 0; i < kTracks; ++i) {
+                obs[i].track_id = 100 + i;
+                obs[i].xn[0] = 0.01 * (double)(i - 10); /* -0.1 .. 0.09 */
+                obs[i].xn[1] = -0.005 * i;
+                obs[i].cov_xn[0] = obs[i].cov_xn[2] = kSigmaXn * kSigmaXn;
+                /* the point at 4 m depth, a prior from the second observation on */
+                obs[i].depth_m = (with_prior && f > 1) ? 4.0 : 0.0;
+                obs[i].depth_var_m2 = (with_prior && f > 1) ? 0.01 : 0.0;
+            }
+            /* the last frame sees none: every track ends with kFrames observations */
+            const int n = f <= kFrames ? kTracks : 0;
+            assert_status(sfd_window_frame(&g_w, (int64_t)50000 * f, obs, n, &ext, &g_ws, &res),
+                          SFD_OK);
+        }
+        assert_int_equal(res.candidates, kTracks);
+        assert_int_equal(res.update_status, SFD_OK);
+        if (with_prior) {
+            assert_int_equal(res.used, kTracks);
+            assert_int_equal(res.no_geometry, 0);
+        } else {
+            assert_int_equal(res.used, 0);
+            assert_int_equal(res.no_geometry, kTracks);
+        }
+        for (int k = 0; k < 3; ++k) assert_true(isfinite(g_w.p_IinW_m[k]));
+    }
+}
+
 /* Clone sequence numbers are compared modulo 2^32 (core/src/window_filter.cpp seq_offset): a
  * flight whose numbers wrap past UINT32_MAX, with keyframes deleting middle clones (which
  * renumbers the later clones and tracks), must give a bit-identical filter to the same flight
@@ -995,6 +1043,7 @@ int main(void) {
         cmocka_unit_test(keyframes_span_more_motion_and_stay_consistent),
         cmocka_unit_test(sequence_numbers_wrap_without_changing_the_filter),
         cmocka_unit_test(the_newest_depth_prior_is_a_second_measurement),
+        cmocka_unit_test(a_track_without_its_first_prior_starts_from_its_newest),
         cmocka_unit_test(unobservable_directions_stay_unobservable),
         cmocka_unit_test(a_jumped_track_is_gated_and_does_not_pull),
         cmocka_unit_test(the_track_test_with_the_filters_covariance_is_calibrated),
