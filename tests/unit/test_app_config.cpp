@@ -279,6 +279,8 @@ void accepted_configurations_start_a_node(void **) {
         [](C &c) { c.node.nav.first_estimates = 1; },
         [](C &c) { c.node.nav.observability_constrained = 0; },
         [](C &c) { c.node.nav.keyframe_parallax_rad = 0.02; },
+        [](C &c) { c.node.nav.window_depth_priors = 0; },
+        [](C &c) { c.node.nav.window_depth_priors = 2; },
         [](C &c) {
             c.node.nav.keyframe_parallax_rad = 0.02;
             c.node.nav.window_size = 4;

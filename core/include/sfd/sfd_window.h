@@ -138,7 +138,9 @@ typedef struct {
     uint32_t first_clone; /**< sequence number of the clone of observation 0 */
     int32_t seen;         /**< 1: observed in the newest frame */
     float depth_last_m;   /**< depth prior of the newest observation, <= 0: none (with
-                               depth_last_var_m2 at the end: both in what was padding) */
+                               depth_last_var_m2 at the end: both in what was padding when L
+                               is odd and int64_t is 8-byte aligned, as on the hosts and
+                               Cortex-M7; 8 B more per track otherwise) */
     int64_t id;
     float depth_m; /**< depth prior of observation 0, <= 0: none (float: one beyond float's
                         range, or with a variance beyond it, is none) */
