@@ -115,6 +115,11 @@ const KeyInfo kKeys[] = {
       "depth priors per track used: none, the first, the first and newest"},
      Kind::kInt,
      SFD_DST(node.nav.window_depth_priors)},
+    {{"filter.window_flagged_earlier", "0|1",
+      "1: a flagged track's earlier observations used through the gate (not after an evidence "
+      "flag); 0: deleted"},
+     Kind::kInt,
+     SFD_DST(node.nav.window_flagged_earlier)},
     {{"filter.window_gate_alpha", "A", "false-alarm rate of the window gate, (0, 0.5]"},
      Kind::kReal,
      SFD_DST(node.nav.window_gate_alpha)},

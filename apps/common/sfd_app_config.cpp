@@ -590,6 +590,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                      {"window_filter", &nv.window_filter},
                      {"window_size", &nv.window_size},
                      {"window_depth_priors", &nv.window_depth_priors},
+                     {"window_flagged_earlier", &nv.window_flagged_earlier},
                      {"first_estimates", &nv.first_estimates},
                      {"observability_constrained", &nv.observability_constrained}};
         std::set<std::string> fknown = {"init_accel_bias_m_s2"};
@@ -773,6 +774,7 @@ bool validate(const AppConfig &cfg, std::string *error) {
     c.flag("filter.window_filter", nv.window_filter);
     c.integer("filter.window_size", nv.window_size, 2, SFD_MAX_WINDOW);
     c.integer("filter.window_depth_priors", nv.window_depth_priors, 0, 2);
+    c.flag("filter.window_flagged_earlier", nv.window_flagged_earlier);
     c.open_interval("filter.window_gate_alpha", nv.window_gate_alpha, 0.0, 0.5, true);
     c.flag("filter.first_estimates", nv.first_estimates);
     c.flag("filter.observability_constrained", nv.observability_constrained);

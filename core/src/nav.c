@@ -33,6 +33,7 @@ void sfd_nav_config_default(sfd_nav_config_t *cfg) {
     cfg->window_size = SFD_MAX_WINDOW;
     cfg->window_depth_priors = 2;
     cfg->window_gate_alpha = 0.01;
+    cfg->window_flagged_earlier = 1;
     cfg->first_estimates = 0;
     cfg->observability_constrained = 1;
     cfg->keyframe_parallax_rad = 0.0;
@@ -76,6 +77,7 @@ sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd
         (cfg->first_estimates != 0 && cfg->first_estimates != 1) ||
         (cfg->observability_constrained != 0 && cfg->observability_constrained != 1) ||
         (cfg->window_depth_priors < 0 || cfg->window_depth_priors > 2) ||
+        (cfg->window_flagged_earlier != 0 && cfg->window_flagged_earlier != 1) ||
         !(cfg->keyframe_parallax_rad >= 0.0 && isfinite(cfg->keyframe_parallax_rad))) {
         return SFD_ERR_INVAL;
     }
@@ -89,6 +91,7 @@ sfd_status_t sfd_nav_init(sfd_nav_t *nav, const sfd_nav_config_t *cfg, const sfd
         wp.first_estimates = cfg->first_estimates;
         wp.observability_constrained = cfg->observability_constrained;
         wp.use_depth_prior = cfg->window_depth_priors;
+        wp.flagged_earlier = cfg->window_flagged_earlier;
         /* Keyframes keep the parity test's older window_frames - 1 frames as the newest clones
          * (it tests every frame against them). */
         wp.keyframe_parallax_rad = cfg->keyframe_parallax_rad;
@@ -388,11 +391,12 @@ static int pixel_noise_xn(const sfd_camera_t *cam, double sigma_px, const double
            cov[2] > 0.0 && cov[0] * cov[2] - cov[1] * cov[1] > 0.0;
 }
 
-/* The window filter's frame: every feature with a coordinate, flagged when judged SPURIOUS (its
- * track's observations are deleted); the tracks its gate refuses lose their landmark too, so the
- * association methods do not score against it. Then the IMU state is read back. */
+/* The window filter's frame: every feature with a coordinate, flagged when judged SPURIOUS (drop
+ * 1: the track ends before it; 2 with whole_track: its observations are deleted); the tracks its
+ * gate refuses lose their landmark too, so the association methods do not score against it.
+ * Then the IMU state is read back. */
 static void window_frame(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *frame,
-                         const int8_t *status) {
+                         const int8_t *status, const uint8_t *whole_track) {
     int32_t n = 0;
     for (int32_t i = 0; i < frame->num_features && n < SFD_MAX_FEATURES; ++i) {
         if (!nav->ok[i]) continue;
@@ -409,7 +413,8 @@ static void window_frame(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_fram
             o->depth_m = 0.0;
             o->depth_var_m2 = 0.0;
         }
-        o->drop = status[i] == SFD_VERDICT_SPURIOUS;
+        o->drop = 0;
+        if (status[i] == SFD_VERDICT_SPURIOUS) o->drop = (whole_track && whole_track[i]) ? 2 : 1;
     }
     sfd_window_result_t *r = &nav->win_result;
     if (sfd_window_frame(&nav->win, frame->utime, nav->work.window.u.obs, n, &nav->ekf_cam.ext,
@@ -500,13 +505,13 @@ static int project_landmark(const sfd_ekf_camera_t *cam, const double R_CtoW[9],
 }
 
 void sfd_nav_finish(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *frame,
-                    const int8_t *status) {
+                    const int8_t *status, const uint8_t *whole_track) {
     if (!nav->cfg.enabled || !nav->ready) {
         nav->have_prev = 0;
         return;
     }
     if (nav->cfg.window_filter) {
-        window_frame(nav, cam, frame, status);
+        window_frame(nav, cam, frame, status, whole_track);
         if (!nav->ready) {
             nav->have_prev = 0;
             return;

@@ -516,14 +516,15 @@ sfd_status_t sfd_pipeline_associate(sfd_pipeline_t *p) {
         /* PARITY: the filter uses what parity accepted; BOTH: OPRF judges parity's survivors */
         for (int i = 0; i < frame->num_features; ++i) {
             const int8_t ps = p->out.verdict.features[i].status;
-            p->skip[i] = (uint8_t)((method == SFD_METHOD_PARITY && ps != SFD_VERDICT_CONSISTENT) ||
-                                   (method == SFD_METHOD_BOTH && ps == SFD_VERDICT_SPURIOUS));
+            p->feature_mark[i] =
+                (uint8_t)((method == SFD_METHOD_PARITY && ps != SFD_VERDICT_CONSISTENT) ||
+                          (method == SFD_METHOD_BOTH && ps == SFD_VERDICT_SPURIOUS));
         }
         /* parity undistorted this frame's features with the same camera: reuse them */
         const int parity_ran = method == SFD_METHOD_PARITY || method == SFD_METHOD_BOTH;
         sfd_nav_t *nv = &p->nav;
         p->num_matches =
-            sfd_nav_build(nv, &p->camera, frame, p->skip, parity_ran ? &p->parity : NULL);
+            sfd_nav_build(nv, &p->camera, frame, p->feature_mark, parity_ran ? &p->parity : NULL);
         p->select_status = sfd_assoc_select(&nv->assoc, &nv->work.assoc.scratch, &nv->ekf,
                                             &nv->ekf_cam, nv->prev_R_CtoW, nv->prev_p_CinW_m,
                                             nv->work.assoc.matches, p->num_matches, &nv->result);
@@ -588,10 +589,18 @@ sfd_status_t sfd_pipeline_update(sfd_pipeline_t *p) {
     p->out.budget_exhausted = 0;
     if (p->nav_ok) apply_association(p, frame);
     recount(&p->out.verdict);
+    /* A SPURIOUS verdict of the parity evidence test judges the track's segment as a whole (a
+     * moving point, a drift): its earlier observations go too. Any other ends the track before
+     * the flagged observation (core/docs/window_filter.md "Flagged tracks"). */
     for (int i = 0; i < frame->num_features; ++i) {
-        p->final_status[i] = p->out.verdict.features[i].status;
+        const sfd_feature_result_t *f = &p->out.verdict.features[i];
+        p->final_status[i] = f->status;
+        p->feature_mark[i] =
+            (uint8_t)(f->status == SFD_VERDICT_SPURIOUS && f->reason == SFD_REASON_EVIDENCE);
     }
-    if (p->cfg.nav.enabled) sfd_nav_finish(&p->nav, &p->camera, frame, p->final_status);
+    if (p->cfg.nav.enabled) {
+        sfd_nav_finish(&p->nav, &p->camera, frame, p->final_status, p->feature_mark);
+    }
     fill_state(p);
     p->counters.frames_processed++;
     if (p->out.verdict.num_consistent + p->out.verdict.num_spurious == 0) {

@@ -97,7 +97,8 @@ bool params_valid(const sfd_window_params_t &p) {
            (p.observability_constrained == 0 || p.observability_constrained == 1) &&
            p.keyframe_parallax_rad >= 0.0 && std::isfinite(p.keyframe_parallax_rad) &&
            (!(p.keyframe_parallax_rad > 0.0) ||
-            (p.keyframe_recent >= 1 && p.keyframe_recent <= p.window - 2));
+            (p.keyframe_recent >= 1 && p.keyframe_recent <= p.window - 2)) &&
+           (p.flagged_earlier == 0 || p.flagged_earlier == 1);
 }
 
 /// Where the Jacobians are evaluated (core/docs/window_filter.md, "Consistency").
@@ -744,6 +745,7 @@ extern "C" sfd_status_t sfd_window_params_default(sfd_window_params_t *params) {
     params->observability_constrained = 1;
     params->keyframe_parallax_rad = 0.0;
     params->keyframe_recent = 2;
+    params->flagged_earlier = 1;
     return SFD_OK;
 }
 
@@ -917,14 +919,19 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
     const uint32_t newest = w->clones[w->num_clones - 1].seq;
     for (int32_t k = 0; k < w->num_tracks; ++k) w->tracks[k].seen = 0;
 
-    // Observations: flagged tracks deleted, the others appended to their track or started.
+    // Observations: a flagged one ends its track (its earlier observations due now, or deleted),
+    // the others appended to their track or started.
     for (int32_t i = 0; i < n; ++i) {
         const sfd_window_obs_t &o = obs[i];
         const int32_t k = find_track(*w, o.track_id);
         if (o.drop) {
             if (k >= 0 && w->tracks[k].used > 0) {
-                w->tracks[k].used = 0;  // deleted at the compaction below
-                w->tracks[k].seen = 1;  // not a candidate
+                sfd_window_track_t &ft = w->tracks[k];
+                // The observations before the flagged one, of a track not already seen in this
+                // frame (a duplicate id), are an ended track: due below, through the gate.
+                const bool ends = o.drop == 1 && w->prm.flagged_earlier == 1 && ft.seen == 0;
+                if (!ends) ft.used = 0;  // deleted at the compaction below
+                ft.seen = ends ? 2 : 1;  // 2: due, and refuses this frame's duplicates
                 result->dropped++;
             }
             continue;
@@ -986,7 +993,7 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
     for (int32_t k = 0; k < w->num_tracks; ++k) {
         sfd_window_track_t &t = w->tracks[k];
         if (t.used <= 0) continue;
-        const bool due = !t.seen || (full && leaving == 0 && t.first_clone == oldest);
+        const bool due = t.seen != 1 || (full && leaving == 0 && t.first_clone == oldest);
         if (!due) continue;
         result->candidates++;
         if (t.used < w->prm.min_observations) {

@@ -136,6 +136,8 @@ std::vector<BadValue> bad_values() {
          "filter.window_depth_priors: 3 is not in 0..2"},
         {"filter.window_depth_priors", [](C &c) { c.node.nav.window_depth_priors = -1; },
          "filter.window_depth_priors: -1 is not in 0..2"},
+        {"filter.window_flagged_earlier", [](C &c) { c.node.nav.window_flagged_earlier = 2; },
+         "filter.window_flagged_earlier: 2 is not 0 or 1"},
         {"filter.window_gate_alpha", [](C &c) { c.node.nav.window_gate_alpha = 0.6; },
          "filter.window_gate_alpha: 0.6 is not in (0, 0.5]"},
         {"filter.window_gate_alpha", [](C &c) { c.node.nav.window_gate_alpha = 0.0; },
@@ -281,6 +283,7 @@ void accepted_configurations_start_a_node(void **) {
         [](C &c) { c.node.nav.keyframe_parallax_rad = 0.02; },
         [](C &c) { c.node.nav.window_depth_priors = 0; },
         [](C &c) { c.node.nav.window_depth_priors = 2; },
+        [](C &c) { c.node.nav.window_flagged_earlier = 0; },
         [](C &c) {
             c.node.nav.keyframe_parallax_rad = 0.02;
             c.node.nav.window_size = 4;

@@ -94,7 +94,7 @@ static void nav_build_matches_first_occurrence_of_previous_tracks(void **state) 
     int8_t status[SFD_MAX_FEATURES];
     for (int i = 0; i < a.num_features; ++i) status[i] = SFD_VERDICT_CONSISTENT;
     assert_int_equal(sfd_nav_build(&g_nav, &cam, &a, NULL, NULL), 0); /* no previous frame */
-    sfd_nav_finish(&g_nav, &cam, &a, status);
+    sfd_nav_finish(&g_nav, &cam, &a, status, NULL);
     assert_int_equal(g_nav.prev_n, 200);
 
     memset(&b, 0, sizeof b);
@@ -119,11 +119,81 @@ static void nav_build_matches_first_occurrence_of_previous_tracks(void **state) 
     assert_near(m5->prev_uv_px[1], a.features[3].v_px, 1e-4);
 }
 
+/* GIVEN the window filter started from TRUTH and 20 static features seen with depth priors from
+ *      a hovering camera for three frames
+ * WHEN the fourth frame judges tracks 0-5 SPURIOUS and tracks 6-9 SPURIOUS with whole_track set
+ * THEN the first six end before the flagged observation (their three earlier observations are
+ *      due in that frame: candidates) and the four whole-track flags delete theirs unused; with
+ *      whole_track NULL all ten end; with window_flagged_earlier 0 none does. Every flagged
+ *      track is gone from the window afterwards (core/docs/window_filter.md "Flagged tracks"). */
+static int flagged_run(int flagged_earlier, int pass_whole, sfd_window_result_t *res) {
+    sfd_nav_config_t cfg;
+    sfd_nav_config_default(&cfg);
+    assert_int_equal(cfg.window_filter, 1);
+    assert_int_equal(cfg.window_flagged_earlier, 1);
+    cfg.init_from_truth = 1;
+    cfg.window_flagged_earlier = flagged_earlier;
+    sfd_params_t params;
+    sfd_params_default(&params);
+    assert_status(sfd_nav_init(&g_nav, &cfg, &params), SFD_OK);
+    sfd_camera_t cam;
+    const double dist[5] = {0, 0, 0, 0, 0};
+    assert_status(sfd_camera_init(&cam, SFD_DISTORTION_PINHOLE, 640, 480, 400, 400, 320, 240, dist),
+                  SFD_OK);
+    sfd_extrinsics_t ext;
+    memset(&ext, 0, sizeof ext);
+    ext.R_CtoI[0] = ext.R_CtoI[4] = ext.R_CtoI[8] = 1.0;
+    sfd_nav_set_camera(&g_nav, &cam, &ext);
+    const double q[4] = {1, 0, 0, 0}, p0[3] = {0, 0, 0};
+    sfd_nav_truth(&g_nav, 1000000, p0, q);
+    sfd_nav_truth(&g_nav, 1050000, p0, q);
+    assert_int_equal(g_nav.ready, 1);
+    static sfd_frame_t fr;
+    int8_t status[SFD_MAX_FEATURES];
+    uint8_t whole[SFD_MAX_FEATURES];
+    for (int f = 1; f <= 4; ++f) {
+        memset(&fr, 0, sizeof fr);
+        fr.utime = 1050000 + 50000 * (int64_t)f;
+        fr.num_features = 20;
+        for (int i = 0; i < fr.num_features; ++i) {
+            fr.features[i].track_id = 500 + i;
+            fr.features[i].u_px = 100.0 + 20.0 * i;
+            fr.features[i].v_px = 150.0 + 9.0 * i;
+            fr.features[i].depth_m = 4.0;
+            fr.features[i].depth_var_m2 = 0.01;
+            status[i] = (f == 4 && i < 10) ? SFD_VERDICT_SPURIOUS : SFD_VERDICT_CONSISTENT;
+            whole[i] = (uint8_t)(f == 4 && i >= 6 && i < 10);
+        }
+        (void)sfd_nav_build(&g_nav, &cam, &fr, NULL, NULL);
+        sfd_nav_finish(&g_nav, &cam, &fr, status, pass_whole ? whole : NULL);
+        assert_int_equal(g_nav.ready, 1);
+    }
+    *res = g_nav.win_result;
+    int flagged_left = 0;
+    for (int k = 0; k < g_nav.win.num_tracks; ++k) flagged_left += g_nav.win.tracks[k].id < 510;
+    return flagged_left;
+}
+
+static void a_spurious_verdict_ends_its_track_unless_it_condemns_the_whole(void **state) {
+    (void)state;
+    sfd_window_result_t r;
+    assert_int_equal(flagged_run(1, 1, &r), 0);
+    assert_int_equal(r.dropped, 10);
+    assert_int_equal(r.candidates, 6);
+    assert_int_equal(r.used + r.gated + r.no_geometry, 6);
+    assert_int_equal(flagged_run(1, 0, &r), 0);
+    assert_int_equal(r.candidates, 10);
+    assert_int_equal(flagged_run(0, 1, &r), 0);
+    assert_int_equal(r.dropped, 10);
+    assert_int_equal(r.candidates, 0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(nav_truth_start_takes_configured_biases),
         cmocka_unit_test(nav_init_nonfinite_accel_bias_refused),
         cmocka_unit_test(nav_build_matches_first_occurrence_of_previous_tracks),
+        cmocka_unit_test(a_spurious_verdict_ends_its_track_unless_it_condemns_the_whole),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

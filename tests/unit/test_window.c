@@ -10,7 +10,8 @@
  *   the linearized system: Phi N_k = N_k+1 over each frame interval and H N = 0 for the tracks,
  *   with the observability constraint and with first estimates, not with current estimates;
  * - the gate refuses a track that jumps to another point (and lists it), the estimate is not
- *   pulled, and the jumped observations never reach the update; a flagged track is dropped;
+ *   pulled, and the jumped observations never reach the update; a flagged track ends (its earlier
+ * observations through the gate) or is deleted whole;
  * - capacities (tracks, window) and bad input are status codes or counters, never writes past an
  *   array. */
 #include "sfd_test.h"
@@ -792,6 +793,73 @@ static void a_track_without_its_first_prior_starts_from_its_newest(void **state)
     }
 }
 
+/* A flagged observation (drop 1) ends its track: the observations before it are due in that
+ * frame and pass through the gate like any ended track's, then the track is deleted; drop 2
+ * deletes them unused; with flagged_earlier 0 drop 1 does too (core/docs/window_filter.md
+ * "Flagged tracks"). A hovering camera with depth priors: every clean track is usable. Tracks
+ * 0-4 are flagged with drop 1, 5-9 with drop 2, 10-14 seen again, 15 jumped 20 px in its third
+ * frame and flagged with drop 1 in its fourth (its earlier observations disagree: gated), and a
+ * duplicate of track 0 after its flag is refused. */
+static void a_flagged_observation_ends_its_track(void **state) {
+    (void)state;
+    enum { kTracks = 16 };
+    sfd_extrinsics_t ext;
+    extrinsics(&ext);
+    for (int earlier = 1; earlier >= 0; --earlier) {
+        sfd_window_params_t prm;
+        assert_status(sfd_window_params_default(&prm), SFD_OK);
+        assert_int_equal(prm.flagged_earlier, 1);
+        prm.flagged_earlier = earlier;
+        assert_status(sfd_window_init(&g_w, &prm), SFD_OK);
+        const double z[3] = {0, 0, 0}, q[4] = {1, 0, 0, 0};
+        assert_status(sfd_window_start_at(&g_w, 0, z, z, q, z, z), SFD_OK);
+        sfd_window_obs_t obs[kTracks + 1];
+        sfd_window_result_t res;
+        for (int f = 1; f <= 4; ++f) {
+            memset(obs, 0, sizeof obs);
+            for (int i = 0; i < kTracks; ++i) {
+                obs[i].track_id = 100 + i;
+                obs[i].xn[0] = 0.01 * (double)(i - 8);
+                obs[i].xn[1] = 0.004 * (double)i;
+                if (i == 15 && f >= 3) obs[i].xn[0] += 0.05; /* 20 px: another point */
+                obs[i].cov_xn[0] = obs[i].cov_xn[2] = kSigmaXn * kSigmaXn;
+                obs[i].depth_m = 4.0;
+                obs[i].depth_var_m2 = 0.01;
+                if (f == 4 && (i < 5 || i == 15)) obs[i].drop = 1;
+                if (f == 4 && i >= 5 && i < 10) obs[i].drop = 2;
+            }
+            int n = kTracks;
+            if (f == 4) { /* track 0 again, unflagged */
+                obs[n] = obs[0];
+                obs[n].drop = 0;
+                ++n;
+            }
+            assert_status(sfd_window_frame(&g_w, (int64_t)50000 * f, obs, n, &ext, &g_ws, &res),
+                          SFD_OK);
+            if (f < 4) assert_int_equal(res.candidates, 0);
+        }
+        assert_int_equal(res.dropped, 11);
+        assert_int_equal(res.overflow, 1); /* the duplicate of flagged track 0 */
+        assert_int_equal(res.update_status, SFD_OK);
+        if (earlier) {
+            assert_int_equal(res.candidates, 6); /* tracks 0-4 and 15, 3 observations each */
+            assert_int_equal(res.used, 5);
+            assert_int_equal(res.gated, 1);
+            assert_int_equal(res.num_gated_ids, 1);
+            assert_int_equal(res.gated_ids[0], 115);
+        } else {
+            assert_int_equal(res.candidates, 0);
+            assert_int_equal(res.used, 0);
+        }
+        /* every flagged track is gone; 10-14 go on */
+        assert_int_equal(g_w.num_tracks, 5);
+        for (int k = 0; k < g_w.num_tracks; ++k) {
+            assert_true(g_w.tracks[k].id >= 110 && g_w.tracks[k].id <= 114);
+            assert_int_equal(g_w.tracks[k].used, 4);
+        }
+    }
+}
+
 /* Clone sequence numbers are compared modulo 2^32 (core/src/window_filter.cpp seq_offset): a
  * flight whose numbers wrap past UINT32_MAX, with keyframes deleting middle clones (which
  * renumbers the later clones and tracks), must give a bit-identical filter to the same flight
@@ -1044,6 +1112,7 @@ int main(void) {
         cmocka_unit_test(sequence_numbers_wrap_without_changing_the_filter),
         cmocka_unit_test(the_newest_depth_prior_is_a_second_measurement),
         cmocka_unit_test(a_track_without_its_first_prior_starts_from_its_newest),
+        cmocka_unit_test(a_flagged_observation_ends_its_track),
         cmocka_unit_test(unobservable_directions_stay_unobservable),
         cmocka_unit_test(a_jumped_track_is_gated_and_does_not_pull),
         cmocka_unit_test(the_track_test_with_the_filters_covariance_is_calibrated),

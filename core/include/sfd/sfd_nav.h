@@ -46,8 +46,12 @@ typedef struct {
                                       0 none, 1 the first observation's, 2 also the newest's
                                       (default; sfd_window_params_t.use_depth_prior) */
     double window_gate_alpha;    /**< false-alarm rate of its per-track chi-square gate */
-    int32_t first_estimates;     /**< window filter: 1 first-estimate Jacobians (overrides the
-                                      next), 0 current estimates */
+    int32_t window_flagged_earlier;    /**< window filter: 1 a SPURIOUS verdict ends its track, the
+                                            observations before it used through the gate (default;
+                                            not for sfd_nav_finish's whole_track); 0 deleted
+                                            (sfd_window_params_t.flagged_earlier) */
+    int32_t first_estimates;           /**< window filter: 1 first-estimate Jacobians (overrides the
+                                            next), 0 current estimates */
     int32_t observability_constrained; /**< window filter, first_estimates 0: 1 current-estimate
                                             Jacobians with the observability constraint (the
                                             default), 0 without (core/docs/window_filter.md) */
@@ -207,9 +211,13 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
  * @param cam the camera given to sfd_nav_build() for this frame (the window filter's pixel noise
  *        through its distortion Jacobian is computed again from it).
  * @param status per feature, SFD_VERDICT_* (the frame's final verdicts).
+ * @param whole_track per feature, nonzero when its SPURIOUS verdict condemns the track's earlier
+ *        observations too (the parity evidence test): the window filter deletes them unused.
+ *        Any other SPURIOUS verdict ends the track before it (window_flagged_earlier). NULL: none
+ *        does.
  */
 void sfd_nav_finish(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t *frame,
-                    const int8_t *status);
+                    const int8_t *status, const uint8_t *whole_track);
 
 #ifdef __cplusplus
 }

@@ -137,7 +137,9 @@ typedef struct {
     int32_t have_output;
     /* scratch */
     int8_t final_status[SFD_MAX_FEATURES];
-    uint8_t skip[SFD_MAX_FEATURES];
+    /** per feature, one frame: in stage 2 the features sfd_nav_build() skips; in stage 3 the
+     *  SPURIOUS verdicts that condemn their whole track (sfd_nav_finish()'s whole_track) */
+    uint8_t feature_mark[SFD_MAX_FEATURES];
     int16_t dup_index[SFD_PIPELINE_DUP_SLOTS]; /**< track id -> feature, -1 empty (one frame) */
 } sfd_pipeline_t;
 
@@ -253,7 +255,8 @@ sfd_status_t sfd_pipeline_associate(sfd_pipeline_t *p);
 
 /**
  * @brief Stage 3: the association's verdicts, the filter's update (the window filter's gated
- *        update, flagged and gated tracks dropped), landmarks and tracks kept for the next frame;
+ *        update: a flagged track ends before its flagged observation, or after an evidence flag
+ *        is deleted whole; a gated one is dropped), landmarks and tracks kept for the next frame;
  *        the output is complete and the frame's slot freed.
  * @return SFD_OK; SFD_ERR_STATE unless stage 2 ran on the frame.
  */

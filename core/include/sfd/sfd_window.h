@@ -102,6 +102,11 @@ typedef struct {
                                             "Keyframes") */
     int32_t keyframe_recent; /**< with keyframes: the newest clones always kept consecutive, 1..L-2
                                   (the parity test's window_frames - 1) */
+    int32_t flagged_earlier; /**< 1: an observation flagged with drop 1 ends its track: the
+                                  observations before it are used as an ended track (through the
+                                  gate), then the track is deleted (1, the default); 0: every
+                                  flag deletes the track's earlier observations unused, as drop
+                                  2 does (core/docs/window_filter.md "Flagged tracks") */
 } sfd_window_params_t;
 
 /** One observation handed to sfd_window_frame(). */
@@ -112,14 +117,19 @@ typedef struct {
                               distortion Jacobian), positive definite */
     double depth_m;      /**< depth prior along the optical axis (m); <= 0: none */
     double depth_var_m2; /**< its variance (m^2), >= 0 */
-    int32_t drop;        /**< 1: the caller judged this observation spurious: the track's
-                              observations are deleted, this one is not added */
+    int32_t drop;        /**< 0: use it. 1: the caller judged this observation spurious: it is
+                              not added, and the track ends before it (flagged_earlier 1: its
+                              earlier observations are due now; 0: deleted). 2 (or any other
+                              nonzero value): the whole track is judged spurious: every
+                              observation of it is deleted unused */
 } sfd_window_obs_t;
 
 /** What one frame did (sfd_window_frame). */
 typedef struct {
     int32_t added;       /**< observations added to tracks */
-    int32_t dropped;     /**< tracks deleted because the caller flagged them */
+    int32_t dropped;     /**< tracks the caller flagged (drop 1 with flagged_earlier 1: ended,
+                              and also counted among the candidates below; otherwise deleted
+                              unused) */
     int32_t overflow;    /**< observations ignored: track table full, duplicate id, bad values */
     int32_t candidates;  /**< tracks that ended or reached the oldest clone */
     int32_t too_short;   /**< of those, fewer than min_observations: deleted unused */
@@ -136,7 +146,8 @@ typedef struct {
 typedef struct {
     int32_t used;         /**< observations held (consecutive clones from first_clone) */
     uint32_t first_clone; /**< sequence number of the clone of observation 0 */
-    int32_t seen;         /**< 1: observed in the newest frame */
+    int32_t seen;         /**< 1: observed in the newest frame; 2: flagged in it (drop 1, its
+                               earlier observations due now) */
     float depth_last_m;   /**< depth prior of the newest observation, <= 0: none (with
                                depth_last_var_m2 at the end: both in what was padding when L
                                is odd and int64_t is 8-byte aligned, as on the hosts and
