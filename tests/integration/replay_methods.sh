@@ -20,8 +20,9 @@ trap 'rm -rf "$tmp"' EXIT
 # One depth prior per track (filter.window_depth_priors: 1): sfd-sim's depths are exact, and with
 # the first and the newest prior (the default, 2) the window filter's own gate refuses most
 # jumped tracks here, so the comparison below would measure the gate rather than the association:
-# on this log the default gives none 0.034 m, both 0.047 m, oprf 0.025 m (with 1: 0.107, 0.085,
-# 0.055 m; docs/evaluation.md "Two depth priors per track").
+# on this log the default gives none 0.034 m, both 0.045 m, oprf 0.030 m (with 1: 0.107, 0.087,
+# 0.052 m; docs/evaluation.md "Two depth priors per track"; measured since a flagged track's
+# earlier observations pass the gate, 2026-11-27; before it 0.047 / 0.025 and 0.085 / 0.055 m).
 printf '%%YAML:1.0\n---\nfilter:\n   init_from_truth: 1\n   window_depth_priors: 1\n' > "$tmp/cfg.yaml"
 for m in none parity oprf ransac1 ransacf both; do
   "$build/apps/sfd-replay" "$tmp/in.lcmlog" --config "$tmp/cfg.yaml" --method "$m" \

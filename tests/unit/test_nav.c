@@ -51,6 +51,25 @@ static void nav_init_nonfinite_accel_bias_refused(void **state) {
     assert_status(sfd_nav_init(&g_nav, &cfg, &params), SFD_ERR_INVAL);
 }
 
+/* Starts g_nav from two TRUTH poses 50 ms apart (the origin, then p1_m), with a 640 x 480
+ * pinhole camera at the IMU (identity extrinsics) returned in cam. */
+static void start_from_truth(const sfd_nav_config_t *cfg, const double p1_m[3], sfd_camera_t *cam) {
+    sfd_params_t params;
+    sfd_params_default(&params);
+    assert_status(sfd_nav_init(&g_nav, cfg, &params), SFD_OK);
+    const double dist[5] = {0, 0, 0, 0, 0};
+    assert_status(sfd_camera_init(cam, SFD_DISTORTION_PINHOLE, 640, 480, 400, 400, 320, 240, dist),
+                  SFD_OK);
+    sfd_extrinsics_t ext;
+    memset(&ext, 0, sizeof ext);
+    ext.R_CtoI[0] = ext.R_CtoI[4] = ext.R_CtoI[8] = 1.0;
+    sfd_nav_set_camera(&g_nav, cam, &ext);
+    const double q[4] = {1, 0, 0, 0}, p0[3] = {0, 0, 0};
+    sfd_nav_truth(&g_nav, 1000000, p0, q);
+    sfd_nav_truth(&g_nav, 1050000, p1_m, q);
+    assert_int_equal(g_nav.ready, 1);
+}
+
 /* GIVEN a started filter and a frame whose track 5 appears twice (a tracker fault) WHEN the
  *      next frame is matched against it
  * THEN each track finds its first occurrence in the previous frame (as a front-to-back search
@@ -61,21 +80,9 @@ static void nav_build_matches_first_occurrence_of_previous_tracks(void **state) 
     sfd_nav_config_t cfg;
     sfd_nav_config_default(&cfg);
     cfg.init_from_truth = 1;
-    sfd_params_t params;
-    sfd_params_default(&params);
-    assert_status(sfd_nav_init(&g_nav, &cfg, &params), SFD_OK);
     sfd_camera_t cam;
-    const double dist[5] = {0, 0, 0, 0, 0};
-    assert_status(sfd_camera_init(&cam, SFD_DISTORTION_PINHOLE, 640, 480, 400, 400, 320, 240, dist),
-                  SFD_OK);
-    sfd_extrinsics_t ext;
-    memset(&ext, 0, sizeof ext);
-    ext.R_CtoI[0] = ext.R_CtoI[4] = ext.R_CtoI[8] = 1.0;
-    sfd_nav_set_camera(&g_nav, &cam, &ext);
-    const double q[4] = {1, 0, 0, 0}, p0[3] = {0, 0, 0}, p1[3] = {0.01, 0, 0};
-    sfd_nav_truth(&g_nav, 1000000, p0, q);
-    sfd_nav_truth(&g_nav, 1050000, p1, q);
-    assert_int_equal(g_nav.ready, 1);
+    const double p1[3] = {0.01, 0, 0};
+    start_from_truth(&cfg, p1, &cam);
 
     static sfd_frame_t a, b;
     memset(&a, 0, sizeof a);
@@ -133,21 +140,9 @@ static int flagged_run(int flagged_earlier, int pass_whole, sfd_window_result_t 
     assert_int_equal(cfg.window_flagged_earlier, 1);
     cfg.init_from_truth = 1;
     cfg.window_flagged_earlier = flagged_earlier;
-    sfd_params_t params;
-    sfd_params_default(&params);
-    assert_status(sfd_nav_init(&g_nav, &cfg, &params), SFD_OK);
     sfd_camera_t cam;
-    const double dist[5] = {0, 0, 0, 0, 0};
-    assert_status(sfd_camera_init(&cam, SFD_DISTORTION_PINHOLE, 640, 480, 400, 400, 320, 240, dist),
-                  SFD_OK);
-    sfd_extrinsics_t ext;
-    memset(&ext, 0, sizeof ext);
-    ext.R_CtoI[0] = ext.R_CtoI[4] = ext.R_CtoI[8] = 1.0;
-    sfd_nav_set_camera(&g_nav, &cam, &ext);
-    const double q[4] = {1, 0, 0, 0}, p0[3] = {0, 0, 0};
-    sfd_nav_truth(&g_nav, 1000000, p0, q);
-    sfd_nav_truth(&g_nav, 1050000, p0, q);
-    assert_int_equal(g_nav.ready, 1);
+    const double hover[3] = {0, 0, 0};
+    start_from_truth(&cfg, hover, &cam);
     static sfd_frame_t fr;
     int8_t status[SFD_MAX_FEATURES];
     uint8_t whole[SFD_MAX_FEATURES];
