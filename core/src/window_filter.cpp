@@ -1155,7 +1155,7 @@ sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
     // each pair of frames touches (H_x is block sparse), in the scratch track's R; the track's
     // Hx is not used (sfd_msckf_track_statistic reads rows, Hf and r).
     sfd_msckf_track_t &tr = scratch->track;
-    const int rows = 2 * m + (depth_row ? 1 : 0);
+    const int rows = 2 * m + nd;
     double hp[SFD_MSCKF_TRACK_ROWS][6];
     int frame_rows[SFD_MAX_WINDOW][3];  // the rows of frame k: 2k, 2k + 1 (and the depth row)
     int frame_nrows[SFD_MAX_WINDOW];
@@ -1193,7 +1193,7 @@ sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
         S[rv][ru] = t.cov_xn[k][1];
         S[rv][rv] = t.cov_xn[k][2];
     }
-    if (depth_row) {
+    if (nd > 0) {  // the depth row dr[0], the newest frame's
         const int r = 2 * m;
         const Vec3 pc = pose[dk].R_WtoC * (pf - pose[dk].p_CinW);
         const Mat3 dth = pose[dk].R_WtoC * skew(pf - p_I[dk]);
