@@ -194,6 +194,17 @@ sfd_status_t msckf_statistic_tail(const sfd_msckf_track_t &t,
                                   const double (*S)[SFD_MSCKF_TRACK_ROWS], int tail_first,
                                   double gamma[2], int32_t dof[2]);
 
+/// Q (rows x 3, row stride 3): an orthonormal basis of the range of the track's H_f (Householder
+/// reflections), so that N N^T = I - Q Q^T for the null-space basis N of eq. (2). False when H_f
+/// has rank below 3 by sfd_msckf_track_project()'s criterion (a triangular pivot below 1e-9 times
+/// its Frobenius norm) or Q is not finite. Reads rows and Hf (msckf_update.cpp).
+bool msckf_range_basis(const sfd_msckf_track_t &t, double (*Q)[3]);
+
+/// sfd_msckf_stack_fold_unprojected() with Q from msckf_range_basis(); the caller has checked the
+/// arguments (unit noise included). SFD_ERR_NUMERIC (stack unchanged) for a non-finite Q^T H_x.
+sfd_status_t msckf_fold_unit_noise(sfd_msckf_stack_t *s, const sfd_msckf_track_t &t,
+                                   const double (*Q)[3]);
+
 }  // namespace sfd
 
 #endif  // SFD_CORE_PRIVATE_HPP

@@ -328,6 +328,152 @@ extern "C" sfd_status_t sfd_msckf_stack_fold(sfd_msckf_stack_t *s, const sfd_msc
     return SFD_OK;
 }
 
+namespace sfd {
+namespace {
+
+/// Row i of H_x is zero outside the columns [span[i][0], span[i][1]) (0, 0 for a zero row).
+void row_spans(const sfd_msckf_track_t &t, int (*span)[2]) {
+    for (int i = 0; i < t.rows; ++i) {
+        int a = 0;
+        while (a < t.n && !(std::fabs(t.Hx[i][a]) > 0.0)) ++a;
+        int b = t.n;
+        while (b > a && !(std::fabs(t.Hx[i][b - 1]) > 0.0)) --b;
+        span[i][0] = a < b ? a : 0;
+        span[i][1] = a < b ? b : 0;
+    }
+}
+
+/// R is exactly the identity (rows x rows): the track's rows have unit noise.
+bool unit_noise(const sfd_msckf_track_t &t) {
+    for (int i = 0; i < t.rows; ++i) {
+        for (int j = 0; j < t.rows; ++j) {
+            const double e = (i == j) ? 1.0 : 0.0;
+            if (!(t.R[i][j] >= e && t.R[i][j] <= e)) return false;  // equal in value
+        }
+    }
+    return true;
+}
+
+}  // namespace
+}  // namespace sfd
+
+bool sfd::msckf_range_basis(const sfd_msckf_track_t &t, double (*Q)[3]) {
+    const int rows = t.rows;
+    double A[kRows][3] = {};  // H_f, reduced in place to the triangular factor
+    double fro = 0.0;
+    for (int i = 0; i < rows; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            A[i][j] = t.Hf[i][j];
+            fro += A[i][j] * A[i][j];
+        }
+    }
+    fro = std::sqrt(fro);
+    double V[3][kRows] = {};  // the reflectors' vectors v_j (entries j..rows-1) and v_j^T v_j
+    double vv[3];
+    for (int j = 0; j < 3; ++j) {
+        double x2 = 0.0;
+        for (int i = j; i < rows; ++i) x2 += A[i][j] * A[i][j];
+        const double xn = std::sqrt(x2);
+        // |R_jj| = xn: the pivot sfd_msckf_track_project() tests (its Givens rotations and these
+        // reflections give the same triangular factor up to signs).
+        if (!(xn > 1e-9 * fro)) return false;
+        const double alpha = A[j][j] >= 0.0 ? -xn : xn;  // no cancellation in v_j's first entry
+        for (int i = j; i < rows; ++i) V[j][i] = A[i][j];
+        V[j][j] -= alpha;
+        double s = 0.0;
+        for (int i = j; i < rows; ++i) s += V[j][i] * V[j][i];
+        vv[j] = s;
+        for (int c = j + 1; c < 3; ++c) {
+            double d = 0.0;
+            for (int i = j; i < rows; ++i) d += V[j][i] * A[i][c];
+            const double f = 2.0 * d / s;
+            for (int i = j; i < rows; ++i) A[i][c] -= f * V[j][i];
+        }
+        A[j][j] = alpha;
+    }
+    // Q_1 = H_0 H_1 H_2 applied to the first three columns of the identity.
+    for (int i = 0; i < rows; ++i) {
+        for (int c = 0; c < 3; ++c) Q[i][c] = (i == c) ? 1.0 : 0.0;
+    }
+    for (int j = 2; j >= 0; --j) {
+        for (int c = 0; c < 3; ++c) {
+            double d = 0.0;
+            for (int i = j; i < rows; ++i) d += V[j][i] * Q[i][c];
+            const double f = 2.0 * d / vv[j];
+            for (int i = j; i < rows; ++i) Q[i][c] -= f * V[j][i];
+        }
+    }
+    for (int i = 0; i < rows; ++i) {
+        if (!all_finite(Q[i], 3)) return false;
+    }
+    return true;
+}
+
+sfd_status_t sfd::msckf_fold_unit_noise(sfd_msckf_stack_t *s, const sfd_msckf_track_t &t,
+                                        const double (*Q)[3]) {
+    const int rows = t.rows, n = s->n;
+    int span[kRows][2];
+    row_spans(t, span);
+    int lo = n, hi = 0;
+    for (int i = 0; i < rows; ++i) {
+        if (span[i][0] < span[i][1]) {
+            lo = span[i][0] < lo ? span[i][0] : lo;
+            hi = span[i][1] > hi ? span[i][1] : hi;
+        }
+    }
+    if (lo >= hi) lo = hi = 0;
+    // Z = Q_1^T H_x over the rows' spans, z = Q_1^T r.
+    double Z[3][kDim] = {};
+    double z[3] = {0.0, 0.0, 0.0};
+    for (int i = 0; i < rows; ++i) {
+        for (int c = 0; c < 3; ++c) {
+            const double q = Q[i][c];
+            for (int j = span[i][0]; j < span[i][1]; ++j) Z[c][j] += q * t.Hx[i][j];
+            z[c] += q * t.r[i];
+        }
+    }
+    for (int c = 0; c < 3; ++c) {
+        if (!all_finite(Z[c] + lo, std::size_t(hi - lo)) || !std::isfinite(z[c])) {
+            return SFD_ERR_NUMERIC;
+        }
+    }
+    // Y += H_x^T H_x (each row over its own span) - Z^T Z; b += H_x^T r - Z^T z.
+    double rr = 0.0;
+    for (int i = 0; i < rows; ++i) {
+        const double *h = t.Hx[i];
+        const int b = span[i][1];
+        for (int a = span[i][0]; a < b; ++a) {
+            const double ha = h[a];
+            if (!(std::fabs(ha) > 0.0)) continue;
+            s->used[a] = 1;
+            double *row = s->Tq[a];
+            for (int c = a; c < b; ++c) row[c] += ha * h[c];
+            row[n] += ha * t.r[i];
+        }
+        rr += t.r[i] * t.r[i];
+    }
+    for (int a = lo; a < hi; ++a) {
+        const double z0 = Z[0][a], z1 = Z[1][a], z2 = Z[2][a];
+        double *row = s->Tq[a];
+        for (int c = a; c < hi; ++c) row[c] -= z0 * Z[0][c] + z1 * Z[1][c] + z2 * Z[2][c];
+        row[n] -= z0 * z[0] + z1 * z[1] + z2 * z[2];
+    }
+    s->residual_ss += std::fmax(rr - (z[0] * z[0] + z[1] * z[1] + z[2] * z[2]), 0.0);
+    s->folded += rows - 3;
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_msckf_stack_fold_unprojected(sfd_msckf_stack_t *s,
+                                                         const sfd_msckf_track_t *t) {
+    if (s == nullptr || t == nullptr || t->projected != 0 || t->rows < 4 || t->rows > kRows ||
+        s->n < 1 || s->n > kDim || t->n != s->n || !track_finite(*t) || !unit_noise(*t)) {
+        return SFD_ERR_INVAL;
+    }
+    double Q[kRows][3];
+    if (!msckf_range_basis(*t, Q)) return SFD_ERR_NUMERIC;
+    return msckf_fold_unit_noise(s, *t, Q);
+}
+
 extern "C" sfd_status_t sfd_msckf_update(sfd_msckf_stack_t *s, double *P, double *dx,
                                          sfd_msckf_work_t *w) {
     if (s == nullptr || P == nullptr || dx == nullptr || w == nullptr || s->n < 1 || s->n > kDim) {

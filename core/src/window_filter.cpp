@@ -454,7 +454,7 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
     sfd_msckf_track_t &tr = scratch->track;
     const int n = dim(*w);
     const int rows = 2 * t.used + nd;
-    tr.rows = rows;
+    tr.rows = 0;  // rows once they are complete (the frame's last track unit.window reads)
     tr.n = n;
     tr.projected = 0;
     for (int i = 0; i < rows; ++i) {
@@ -500,31 +500,52 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
                 tr.Hf[r][j] = Hf(a, j);
             }
         }
-        const std::size_t ru = 2U * static_cast<std::size_t>(k), rv = ru + 1U;
+        const int ru = 2 * k, rv = ru + 1;
         tr.r[ru] = t.xn[k][0] - pc.x() / pc.z();
         tr.r[rv] = t.xn[k][1] - pc.y() / pc.z();
-        tr.R[ru][ru] = t.cov_xn[k][0];
-        tr.R[ru][rv] = t.cov_xn[k][1];
-        tr.R[rv][ru] = t.cov_xn[k][1];
-        tr.R[rv][rv] = t.cov_xn[k][2];
+        // Unit noise: the two rows times L^-1, L L^T = the observation's covariance (lower
+        // Cholesky factor; positive definite by store_observation, up to the rounding of its
+        // second pivot, refused as a non-positive-definite R always was). R becomes the identity.
+        const double l00 = std::sqrt(static_cast<double>(t.cov_xn[k][0]));
+        const double l10 = static_cast<double>(t.cov_xn[k][1]) / l00;
+        const double p11 = static_cast<double>(t.cov_xn[k][2]) - l10 * l10;
+        if (!(p11 > 0.0)) return TrackOutcome::kNumeric;
+        const double l11 = std::sqrt(p11);
+        const auto whiten = [l00, l10, l11](double *u, double *v) {
+            *u /= l00;
+            *v = (*v - l10 * *u) / l11;
+        };
+        for (int j = 0; j < 6; ++j) whiten(&tr.Hx[ru][col + j], &tr.Hx[rv][col + j]);
+        for (int j = 0; j < 3; ++j) whiten(&tr.Hf[ru][j], &tr.Hf[rv][j]);
+        whiten(&tr.r[ru], &tr.r[rv]);
     }
     for (int i = 0; i < nd; ++i) {  // the depth rows: d z / d(p_I, theta, p_f) at clone k
         const int r = 2 * t.used + i;
         const int k = dr[i].k;
         const Vec3 pc = cur[k].R_WtoC * (pf - cur[k].p_CinW);
         const int col = kImu + 6 * (c0 + k);
+        const double sd = std::sqrt(dr[i].var_m2);  // unit noise: the row over its deviation
         for (int j = 0; j < 3; ++j) {
-            tr.Hx[r][col + j] = -fej[k].R_WtoC(2, j);
-            tr.Hx[r][col + 3 + j] = dth[k](2, j);
-            tr.Hf[r][j] = fej[k].R_WtoC(2, j);
+            tr.Hx[r][col + j] = -fej[k].R_WtoC(2, j) / sd;
+            tr.Hx[r][col + 3 + j] = dth[k](2, j) / sd;
+            tr.Hf[r][j] = fej[k].R_WtoC(2, j) / sd;
         }
-        tr.r[r] = dr[i].depth_m - pc.z();
-        tr.R[r][r] = dr[i].var_m2;
+        tr.r[r] = (dr[i].depth_m - pc.z()) / sd;
     }
+    for (int i = 0; i < rows; ++i) {
+        tr.R[i][i] = 1.0;
+        // a non-finite row has no geometry, as sfd_msckf_track_project() refuses it
+        const int col = kImu + 6 * (c0 + (i < 2 * t.used ? i / 2 : dr[i - 2 * t.used].k));
+        if (!all_finite(tr.Hx[i] + col, 6) || !all_finite(tr.Hf[i], 3) || !std::isfinite(tr.r[i])) {
+            return TrackOutcome::kNoGeometry;
+        }
+    }
+    tr.rows = rows;
     // The gate (3) from the unprojected track, as sfd_window_test_track computes it: S = H_x P
-    // H_x^T + R from the 6x6 blocks of P the clones' rows touch, gamma by the least-squares
-    // identity (sfd_msckf_track_statistic; equal to projecting, then sfd_msckf_track_gate). The
-    // outcomes keep their order: a failed projection is kNoGeometry, a failed gate kNumeric.
+    // H_x^T + I (unit noise) from the 6x6 blocks of P the clones' rows touch, gamma by the
+    // least-squares identity (sfd_msckf_track_statistic; equal to projecting, then
+    // sfd_msckf_track_gate). The outcomes keep their order: an H_f without rank 3 (no
+    // projection) is kNoGeometry, a failed gate kNumeric.
     double S[SFD_MSCKF_TRACK_ROWS][SFD_MSCKF_TRACK_ROWS];
     double hp[SFD_MSCKF_TRACK_ROWS][6];
     int cols[SFD_MAX_WINDOW][2];
@@ -555,12 +576,16 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
     double gamma = 0.0;
     int32_t dof = 0;
     const sfd_status_t gate_status = sfd_msckf_track_statistic(&tr, S, &gamma, &dof);
-    if (sfd_msckf_track_project(&tr) != SFD_OK) return TrackOutcome::kNoGeometry;
+    // The projection (2) as the basis of H_f's range, N N^T = I - Q Q^T; the fold uses it
+    // (sfd_msckf_stack_fold_unprojected without its checks: the rows are finite, checked above,
+    // and have unit noise).
+    double Q[SFD_MSCKF_TRACK_ROWS][3];
+    if (!msckf_range_basis(tr, Q)) return TrackOutcome::kNoGeometry;
     if (gate_status != SFD_OK) return TrackOutcome::kNumeric;
     *gamma_out = gamma;
     *dof_out = dof;
     if (dof < 1 || dof >= SFD_MSCKF_TRACK_ROWS || gamma > w->gate[dof]) return TrackOutcome::kGated;
-    if (sfd_msckf_stack_fold(&scratch->stack, &tr) != SFD_OK) return TrackOutcome::kNumeric;
+    if (msckf_fold_unit_noise(&scratch->stack, tr, Q) != SFD_OK) return TrackOutcome::kNumeric;
     return TrackOutcome::kUsed;
 }
 
@@ -911,7 +936,7 @@ extern "C" sfd_status_t sfd_window_frame(sfd_window_t *w, int64_t utime,
     }
     if (!w->started) return SFD_ERR_STATE;
     std::memset(result, 0, offsetof(sfd_window_result_t, gated_ids));
-    scratch->track.projected = 0;  // set again by a track of this frame that reaches projection
+    scratch->track.rows = 0;  // set again by a track of this frame whose rows are complete
     flush(w);
     if (w->num_clones >= w->prm.window) marginalize_clone(w, 0);  // defensive: invariant
     augment(w, utime);

@@ -4,8 +4,9 @@
  * statistic equals the statistic with the landmark eliminated by weighted least squares (the
  * parity-space statistic with known translation); it is chi2(rows - 3) for consistent tracks
  * whatever the landmark error (Monte Carlo with a binomial interval); the QR-compressed update
- * equals the textbook Kalman update with every projected row; bad sizes and rank-deficient
- * landmarks are status codes. */
+ * equals the textbook Kalman update with every projected row; folding an unprojected unit-noise
+ * track equals projecting, then folding; bad sizes and rank-deficient landmarks are status
+ * codes. */
 #include "sfd_test.h"
 #include "test_dense.h"
 
@@ -410,6 +411,113 @@ static void bad_sizes_and_degenerate_landmarks_are_status_codes(void **state) {
     assert_int_equal(g_stack.folded, 0);
 }
 
+/* GIVEN tracks with unit noise (R = I), dense or with the window filter's block sparsity (each
+ * observation's two rows on one clone's six columns, the depth row on one clone's) WHEN folded
+ * unprojected (the Schur complement: H_x^T H_x - Z^T Z with Z = Q_1^T H_x) THEN the normal
+ * equations equal those of projecting, then folding, to rounding: every entry of Y and b, the
+ * touched columns, the folded row count and the residual's square; and the update from them
+ * is the same. */
+static void unprojected_fold_equals_projecting_then_folding(void **state) {
+    (void)state;
+    static sfd_msckf_stack_t other;
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 21);
+    const int n = 27; /* 15 + 2 clones of 6 */
+    for (int sparse = 0; sparse <= 1; ++sparse) {
+        assert_int_equal(sfd_msckf_stack_reset(&g_stack, n), SFD_OK);
+        assert_int_equal(sfd_msckf_stack_reset(&other, n), SFD_OK);
+        for (int rows = 4; rows <= TR; ++rows) {
+            random_track(&rng, rows, n, &g_track);
+            for (int i = 0; i < rows; ++i) {
+                for (int j = 0; j < rows; ++j) g_track.R[i][j] = (i == j) ? 1.0 : 0.0;
+                g_track.r[i] = sfd_prng_gaussian(&rng);
+                /* frame of row i: clones of 6 columns after the 15 IMU ones, 1 or 2 in turn */
+                const int clone = 15 + 6 * ((i / 2) % 2);
+                for (int j = 0; sparse && j < n; ++j) {
+                    if (j < clone || j >= clone + 6) g_track.Hx[i][j] = 0.0;
+                }
+            }
+            g_copy = g_track;
+            g_before = g_track;
+            assert_int_equal(sfd_msckf_stack_fold_unprojected(&g_stack, &g_track), SFD_OK);
+            assert_memory_equal(&g_track, &g_before, sizeof g_track); /* the track is read only */
+            assert_int_equal(sfd_msckf_track_project(&g_copy), SFD_OK);
+            assert_int_equal(sfd_msckf_stack_fold(&other, &g_copy), SFD_OK);
+            double scale = 0.0;
+            for (int a = 0; a < n; ++a) {
+                for (int c = a; c <= n; ++c) scale = fmax(scale, fabs(other.Tq[a][c]));
+            }
+            for (int a = 0; a < n; ++a) {
+                assert_int_equal(g_stack.used[a], other.used[a]);
+                for (int c = a; c <= n; ++c) {
+                    assert_true(fabs(g_stack.Tq[a][c] - other.Tq[a][c]) <= 1e-12 * scale);
+                }
+            }
+            assert_int_equal(g_stack.folded, other.folded);
+            assert_true(fabs(g_stack.residual_ss - other.residual_ss) <=
+                        1e-12 * (1.0 + other.residual_ss));
+        }
+        if (sparse) {
+            for (int a = 0; a < 15; ++a) assert_int_equal(g_stack.used[a], 0); /* IMU columns */
+        }
+        random_spd(&rng, n, g_P);
+        memcpy(g_P2, g_P, sizeof g_P);
+        double dx[D], dx2[D];
+        assert_int_equal(sfd_msckf_update(&g_stack, g_P, dx, &g_work), SFD_OK);
+        assert_int_equal(sfd_msckf_update(&other, g_P2, dx2, &g_work), SFD_OK);
+        for (int i = 0; i < n; ++i) {
+            assert_true(fabs(dx[i] - dx2[i]) <= 1e-9 * (1.0 + fabs(dx2[i])));
+            for (int j = 0; j < n; ++j) {
+                assert_true(fabs(g_P[i * D + j] - g_P2[i * D + j]) <=
+                            1e-9 * (1.0 + fabs(g_P2[i * D + j])));
+            }
+        }
+    }
+}
+
+/* GIVEN tracks the unprojected fold cannot take WHEN folded THEN a status code and an unchanged
+ * stack: a noise that is not exactly the identity, a projected track, sizes, a non-finite entry,
+ * another dimension (SFD_ERR_INVAL); an H_f of rank 2 (SFD_ERR_NUMERIC, as the projection). */
+static void unprojected_fold_refuses_what_it_cannot_fold(void **state) {
+    (void)state;
+    static sfd_msckf_stack_t before;
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 22);
+    random_track(&rng, 7, 10, &g_track);
+    for (int i = 0; i < 7; ++i) {
+        for (int j = 0; j < 7; ++j) g_track.R[i][j] = (i == j) ? 1.0 : 0.0;
+    }
+    assert_int_equal(sfd_msckf_stack_reset(&g_stack, 10), SFD_OK);
+    assert_int_equal(sfd_msckf_stack_fold_unprojected(&g_stack, &g_track), SFD_OK);
+    before = g_stack;
+    g_copy = g_track;
+    g_copy.R[1][2] = 1e-300; /* not the identity */
+    assert_int_equal(sfd_msckf_stack_fold_unprojected(&g_stack, &g_copy), SFD_ERR_INVAL);
+    g_copy = g_track;
+    g_copy.R[3][3] = 2.0;
+    assert_int_equal(sfd_msckf_stack_fold_unprojected(&g_stack, &g_copy), SFD_ERR_INVAL);
+    g_copy = g_track;
+    g_copy.projected = 1;
+    assert_int_equal(sfd_msckf_stack_fold_unprojected(&g_stack, &g_copy), SFD_ERR_INVAL);
+    g_copy = g_track;
+    g_copy.rows = 3;
+    assert_int_equal(sfd_msckf_stack_fold_unprojected(&g_stack, &g_copy), SFD_ERR_INVAL);
+    g_copy.rows = TR + 1;
+    assert_int_equal(sfd_msckf_stack_fold_unprojected(&g_stack, &g_copy), SFD_ERR_INVAL);
+    g_copy = g_track;
+    g_copy.n = 9;
+    assert_int_equal(sfd_msckf_stack_fold_unprojected(&g_stack, &g_copy), SFD_ERR_INVAL);
+    g_copy = g_track;
+    g_copy.Hx[2][4] = NAN;
+    assert_int_equal(sfd_msckf_stack_fold_unprojected(&g_stack, &g_copy), SFD_ERR_INVAL);
+    assert_int_equal(sfd_msckf_stack_fold_unprojected(NULL, &g_track), SFD_ERR_INVAL);
+    assert_int_equal(sfd_msckf_stack_fold_unprojected(&g_stack, NULL), SFD_ERR_INVAL);
+    g_copy = g_track;
+    for (int i = 0; i < 7; ++i) g_copy.Hf[i][2] = 2.0 * g_copy.Hf[i][0] - g_copy.Hf[i][1];
+    assert_int_equal(sfd_msckf_stack_fold_unprojected(&g_stack, &g_copy), SFD_ERR_NUMERIC);
+    assert_memory_equal(&g_stack, &before, sizeof g_stack);
+}
+
 /* One unit-noise row w = [1 0] with residual 0.5 in a 2-state stack (Y = [1 0; 0 0], b = [0.5 0]):
  * T = [1 0], q = 0.5. */
 static void fold_one_unit_row(void) {
@@ -451,6 +559,8 @@ int main(void) {
         cmocka_unit_test(compressed_update_equals_the_kalman_filter),
         cmocka_unit_test(compressed_update_equals_the_kalman_filter_when_directions_are_unobserved),
         cmocka_unit_test(bad_sizes_and_degenerate_landmarks_are_status_codes),
+        cmocka_unit_test(unprojected_fold_equals_projecting_then_folding),
+        cmocka_unit_test(unprojected_fold_refuses_what_it_cannot_fold),
         cmocka_unit_test(update_refuses_a_negative_variance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

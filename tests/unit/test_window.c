@@ -226,9 +226,11 @@ static double phi_null_violation(const sfd_window_t *w, const double fe_p0[3],
 /* H N for the last projected track of a frame (g_ws.track: its rows are N_f^T H_x, the point
  * projected out), with N at the clones' first-estimate positions: clones[] as they were before
  * the frame's marginalization. Relative to |H row| |N column|. */
+/* The frame's last track (whitened, unprojected) projected here as the update projects it. */
+static sfd_msckf_track_t g_projected;
 static double h_null_violation(const sfd_window_t *w, const sfd_window_clone_t *clones,
                                int num_clones) {
-    const sfd_msckf_track_t *tr = &g_ws.track;
+    const sfd_msckf_track_t *tr = &g_projected;
     const double g = w->prm.noise.gravity_m_s2;
     double worst = 0.0;
     for (int c = 0; c < 4; ++c) {
@@ -485,10 +487,13 @@ static void run_flight_from(uint64_t seed, double seconds, int jac, int jump_tra
         assert_status(sfd_window_frame(&g_w, (int64_t)rest_samples * 5000 + (int64_t)f * 50000,
                                        given, n, &ext, &g_ws, &res),
                       SFD_OK);
-        if (g_null_check && g_ws.track.projected) {
-            const double vh = h_null_violation(&g_w, clones, num_clones);
-            if (vh > g_h_violation) g_h_violation = vh;
-            ++g_h_checked;
+        if (g_null_check && g_ws.track.rows >= 4) {
+            g_projected = g_ws.track;
+            if (sfd_msckf_track_project(&g_projected) == SFD_OK) {
+                const double vh = h_null_violation(&g_w, clones, num_clones);
+                if (vh > g_h_violation) g_h_violation = vh;
+                ++g_h_checked;
+            }
         }
         assert_status(res.update_status, SFD_OK);
         if (g_w.num_clones >= 2) {

@@ -132,6 +132,25 @@ sfd_status_t sfd_msckf_stack_reset(sfd_msckf_stack_t *stack, int32_t n);
 sfd_status_t sfd_msckf_stack_fold(sfd_msckf_stack_t *stack, const sfd_msckf_track_t *track);
 
 /**
+ * @brief Folds an unprojected track whose rows have unit noise (R exactly the identity: the
+ *        caller whitened them) into the normal equations as sfd_msckf_track_project() then
+ *        sfd_msckf_stack_fold() would, up to rounding (unit.msckf), without forming N. With Q_1
+ *        an orthonormal basis of H_f's range (Householder reflections), N N^T = I - Q_1 Q_1^T,
+ *        so the projected rows' information and its right-hand side are
+ *            Y += H_x^T H_x - Z^T Z,  b += H_x^T r - Z^T z,  Z = Q_1^T H_x,  z = Q_1^T r,
+ *        the Schur complement of the point in the information of (1). Rows of H_x that touch
+ *        few columns (a window filter's: one clone's six) keep H_x^T H_x block diagonal, and
+ *        Z^T Z has rank 3: a fraction of the rotations of the projection and of the rows - 3
+ *        dense outer products of the fold. folded grows by rows - 3.
+ * @return SFD_OK; SFD_ERR_INVAL (null, a projected track, rows outside 4..SFD_MSCKF_TRACK_ROWS,
+ *         n differs from the stack's, R not exactly the identity, a non-finite entry);
+ *         SFD_ERR_NUMERIC when H_f has rank below 3 (sfd_msckf_track_project()'s criterion) or
+ *         Q_1^T H_x is not finite (stack unchanged on every error).
+ */
+sfd_status_t sfd_msckf_stack_fold_unprojected(sfd_msckf_stack_t *stack,
+                                              const sfd_msckf_track_t *track);
+
+/**
  * @brief The Kalman update (4): Y = U^T U (Cholesky over the touched columns; a pivot below
  *        1e-12 of its diagonal is an unobserved direction and its row is dropped), T = U,
  *        q = U^-T b, then dx (n values) and P in place (P - K (P T^T)^T, symmetrized). With no

@@ -209,9 +209,9 @@ typedef struct {
  * and separate from sfd_window_t so that a caller can overlay it with other per-frame work
  * (sfd_nav_t shares it with the association's matches, which are dead by then). No content is
  * kept between calls: any scratch of the right type will do, but one scratch must not serve two
- * calls at once. After sfd_window_frame, track holds the last track of that frame that reached
- * the projection when its projected is 1, with the clone columns of before the frame's
- * marginalization (unit.window reads it).
+ * calls at once. After sfd_window_frame, track holds the last track of that frame whose rows
+ * were complete when its rows is nonzero: unprojected, whitened (R = I), with the clone columns
+ * of before the frame's marginalization (unit.window projects and reads it).
  */
 typedef struct {
     sfd_msckf_track_t track; /**< one track's rows (both calls) */
