@@ -421,8 +421,9 @@ void add_pose_covariance(const sfd_window_t &w, int frames, const int (*cols)[2]
 enum class TrackOutcome { kNoGeometry, kGated, kUsed, kNumeric };
 
 /// The track's residual (1) at the current clones, its Jacobians (at the current clones,
-/// observability-constrained, or at the first estimates), the projection (2), the gate (3) and,
-/// when it passes, the fold into the stack.
+/// observability-constrained, or at the first estimates), its rows whitened (R = I), the gate
+/// (3) and, when it passes, the fold of its projection (2) into the stack (the Schur complement
+/// of the point; sfd_msckf_stack_fold_unprojected).
 TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
                            const sfd_window_track_t &t, const sfd_extrinsics_t &ext,
                            double *gamma_out, int32_t *dof_out) {
@@ -504,8 +505,9 @@ TrackOutcome process_track(sfd_window_t *w, sfd_window_scratch_t *scratch,
         tr.r[ru] = t.xn[k][0] - pc.x() / pc.z();
         tr.r[rv] = t.xn[k][1] - pc.y() / pc.z();
         // Unit noise: the two rows times L^-1, L L^T = the observation's covariance (lower
-        // Cholesky factor; positive definite by store_observation, up to the rounding of its
-        // second pivot, refused as a non-positive-definite R always was). R becomes the identity.
+        // Cholesky factor). store_observation checked its determinant in double; a second pivot
+        // that rounds to zero or below is refused here (kNumeric, before the gate, where the old
+        // fold's Cholesky of N^T R N refused a nearly singular R after it). R becomes I.
         const double l00 = std::sqrt(static_cast<double>(t.cov_xn[k][0]));
         const double l10 = static_cast<double>(t.cov_xn[k][1]) / l00;
         const double p11 = static_cast<double>(t.cov_xn[k][2]) - l10 * l10;
