@@ -54,7 +54,8 @@ GRID = {"alpha": ("--false-alarm-rate", "false_alarm_rate"),
         "window": ("--window-frames", "window_frames"),
         "group": ("--group-size", "group_size"),
         "pixel-sigma": ("--pixel-sigma-px", "pixel_sigma_px"),
-        "depth-default": ("--default-depth-m", "default_depth_m")}
+        "depth-default": ("--default-depth-m", "default_depth_m"),
+        "hold": ("--alarm-hold-ratio", "alarm_hold_ratio")}
 PRESETS = {
     "quick": dict(scenarios=["mistracking", "moving-object"], seeds="1,2",
                   methods=",".join(METHODS), grid=["alpha=0.01,0.1"], frames=200),

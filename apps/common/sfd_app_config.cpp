@@ -485,6 +485,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                                                 "pixel_noise_adapt",
                                                 "evidence_frames",
                                                 "both_parity_share",
+                                                "alarm_hold_ratio",
                                                 "default_depth_m",
                                                 "default_depth_var_m2",
                                                 "max_imu_gap_us",
@@ -513,6 +514,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
     } nums[] = {{"false_alarm_rate", &p.false_alarm_rate},
                 {"pixel_sigma_px", &p.pixel_sigma_px},
                 {"both_parity_share", &p.both_parity_share},
+                {"alarm_hold_ratio", &p.alarm_hold_ratio},
                 {"default_depth_m", &p.default_depth_m},
                 {"default_depth_var_m2", &p.default_depth_var_m2},
                 {"ransac_confidence", &p.ransac_confidence}};
@@ -748,6 +750,7 @@ bool validate(const AppConfig &cfg, std::string *error) {
     c.flag("pixel_noise_adapt", p.pixel_noise_adapt);
     c.integer("evidence_frames", p.evidence_frames, 0, SFD_MAX_WINDOW);
     c.open_interval("both_parity_share", p.both_parity_share, 0.0, 1.0, false);
+    c.open_interval("alarm_hold_ratio", p.alarm_hold_ratio, 0.0, 1.0, true);
     // stored as float by the parity detector (sfd_parity_obs_t)
     c.closed_interval("default_depth_m", p.default_depth_m, FLT_MIN, FLT_MAX);
     c.closed_interval("default_depth_var_m2", p.default_depth_var_m2, 0.0, FLT_MAX);

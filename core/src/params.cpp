@@ -24,6 +24,7 @@ extern "C" sfd_status_t sfd_params_default(sfd_params_t *p) {
     // With the filter's translation, OPRF finds few spurious features that parity has passed
     // (docs/evaluation.md "Method both: the false-alarm split"), so most of alpha goes to parity.
     p->both_parity_share = 0.9;
+    p->alarm_hold_ratio = 1.0;
     return SFD_OK;
 }
 
@@ -50,5 +51,6 @@ extern "C" sfd_status_t sfd_params_validate(const sfd_params_t *p) {
     if (p->pixel_noise_adapt != 0 && p->pixel_noise_adapt != 1) return SFD_ERR_INVAL;
     if (p->evidence_frames < 0 || p->evidence_frames > SFD_MAX_WINDOW) return SFD_ERR_INVAL;
     if (!(p->both_parity_share > 0.0 && p->both_parity_share < 1.0)) return SFD_ERR_INVAL;
+    if (!(p->alarm_hold_ratio > 0.0 && p->alarm_hold_ratio <= 1.0)) return SFD_ERR_INVAL;
     return SFD_OK;
 }

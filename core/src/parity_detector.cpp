@@ -410,6 +410,7 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
         o.valid = 0;
         o.prior = 0;
         o.segment = 0;
+        o.alarm = 0;
         const double uv[2] = {f.u_px, f.v_px};
         double J[4];
         double xn[2];
@@ -461,7 +462,7 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
                 o.prev = static_cast<int16_t>(p);
                 o.run = static_cast<int16_t>(pf.obs[p].run >= SFD_MAX_WINDOW ? SFD_MAX_WINDOW
                                                                              : pf.obs[p].run + 1);
-                o.segment = static_cast<int16_t>(
+                o.segment = static_cast<int8_t>(
                     pf.obs[p].segment >= SFD_MAX_WINDOW ? SFD_MAX_WINDOW : pf.obs[p].segment + 1);
             }
         }
@@ -512,6 +513,10 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // it each test runs at alpha / 2, so a clean feature is flagged with probability <= alpha.
 // False when the filter does not hold the window's frames (nothing written: the caller falls
 // back to the group test).
+// The alarm hold (parity_space.md "Alarm hold"): a track whose previous observation this test
+// flagged is tested against alarm_hold_ratio times the window test's threshold. A moving point
+// or a drift is inconsistent over its whole life, while its 3-frame window alone passes in a
+// fraction of frames; a clean track pays the lower threshold only after a false alarm.
 __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t *filter,
                                                 sfd_window_scratch_t *scratch,
                                                 const sfd_extrinsics_t &ext, sfd_verdict_t *out) {
@@ -536,6 +541,9 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
     const bool evidence = want > L;
     const sfd_chi2_table_t &tab = evidence ? det.chi2_half : det.chi2;
     sfd_parity_frame_t &nf = det.frames[det.head];
+    // the previous frame (newest.prev indexes it; the window check above means L >= 2 frames)
+    const sfd_parity_frame_t &pf = det.frames[ring_index(det, 1)];
+    const double hold = det.params.alarm_hold_ratio;
     const double scale = det.params.pixel_noise_adapt ? det.noise_scale : 1.0;
     float *u = det.stat_scratch;  // gamma over the median of chi2(dof), per tested feature
     int n_u = 0;
@@ -569,13 +577,17 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
             v->reason = (st == SFD_ERR_NUMERIC) ? SFD_REASON_RANK : SFD_REASON_NUMERIC;
             continue;
         }
-        double thr = tab.threshold[dofs[0]];
+        const bool held = hold < 1.0 && newest.prev >= 0 && pf.obs[newest.prev].alarm != 0;
+        double thr = tab.threshold[dofs[0]] * (held ? hold : 1.0);
         u[n_u++] = static_cast<float>(gam[0] / det.chi2_median.threshold[dofs[0]]);
         if (gam[0] > thr) {
-            set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_FEATURE_TEST, dofs[0], gam[0], thr);
+            set_verdict(v, SFD_VERDICT_SPURIOUS,
+                        held ? SFD_REASON_ALARM_HOLD : SFD_REASON_FEATURE_TEST, dofs[0], gam[0],
+                        thr);
             v->fault_kind = SFD_FAULT_UNKNOWN;
             out->flags |= SFD_FLAG_PARITY_ALARM;
             newest.segment = 1;  // an alarm: the track's segment starts again here
+            newest.alarm = 1;
             continue;
         }
         set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, dofs[0], gam[0], thr);
@@ -585,6 +597,7 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
             set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_EVIDENCE, dofs[1], gam[1], thr);
             v->fault_kind = SFD_FAULT_DRIFT;
             out->flags |= SFD_FLAG_PARITY_ALARM;
+            newest.alarm = 1;
         }
     }
     update_noise_scale(det, u, n_u);

@@ -65,6 +65,9 @@ static void params_out_of_range_rejected(void **state) {
     EXPECT_FIELD(both_parity_share, 0.0, SFD_ERR_INVAL);
     EXPECT_FIELD(both_parity_share, 1.0, SFD_ERR_INVAL);
     EXPECT_FIELD(both_parity_share, NAN, SFD_ERR_INVAL);
+    EXPECT_FIELD(alarm_hold_ratio, 0.0, SFD_ERR_INVAL);
+    EXPECT_FIELD(alarm_hold_ratio, 1.0000001, SFD_ERR_INVAL);
+    EXPECT_FIELD(alarm_hold_ratio, NAN, SFD_ERR_INVAL);
 }
 
 /* GIVEN boundary values THEN they are accepted. */

@@ -60,6 +60,12 @@ typedef struct {
                                     gets; OPRF, which then judges parity's survivors, gets the
                                     rest, so a clean feature is flagged with probability at most
                                     false_alarm_rate (a weighted Bonferroni split); (0, 1) */
+    double alarm_hold_ratio;   /**< with the filter's translation: a track whose previous
+                                    observation the test flagged is tested against this fraction
+                                    of the window test's threshold (a two-threshold, hysteresis
+                                    rule: a moving point or a drift stays flagged through the
+                                    frames its window alone would pass; core/docs/parity_space.md
+                                    "Alarm hold"); 1: off; (0, 1] */
 } sfd_params_t;
 
 /** @brief Fills @p p with the defaults: method PARITY, 1 px, alpha 0.01, L = 3, n = 3, unknown
