@@ -486,6 +486,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                                                 "evidence_frames",
                                                 "both_parity_share",
                                                 "alarm_hold_ratio",
+                                                "alarm_hold_frames",
                                                 "default_depth_m",
                                                 "default_depth_var_m2",
                                                 "max_imu_gap_us",
@@ -531,6 +532,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                 {"parity_isolation", &p.parity_isolation},
                 {"pixel_noise_adapt", &p.pixel_noise_adapt},
                 {"evidence_frames", &p.evidence_frames},
+                {"alarm_hold_frames", &p.alarm_hold_frames},
                 {"max_hypotheses", &p.max_hypotheses}};
     for (const IntKey &k : ints) {
         if (!root[k.name].empty() && !rd.integer(root[k.name], k.name, k.dst)) return false;
@@ -751,6 +753,7 @@ bool validate(const AppConfig &cfg, std::string *error) {
     c.integer("evidence_frames", p.evidence_frames, 0, SFD_MAX_WINDOW);
     c.open_interval("both_parity_share", p.both_parity_share, 0.0, 1.0, false);
     c.open_interval("alarm_hold_ratio", p.alarm_hold_ratio, 0.0, 1.0, true);
+    c.integer("alarm_hold_frames", p.alarm_hold_frames, 1, SFD_ALARM_HOLD_MAX_FRAMES);
     // stored as float by the parity detector (sfd_parity_obs_t)
     c.closed_interval("default_depth_m", p.default_depth_m, FLT_MIN, FLT_MAX);
     c.closed_interval("default_depth_var_m2", p.default_depth_var_m2, 0.0, FLT_MAX);

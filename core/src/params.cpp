@@ -25,6 +25,7 @@ extern "C" sfd_status_t sfd_params_default(sfd_params_t *p) {
     // (docs/evaluation.md "Method both: the false-alarm split"), so most of alpha goes to parity.
     p->both_parity_share = 0.9;
     p->alarm_hold_ratio = 1.0;
+    p->alarm_hold_frames = 1;
     return SFD_OK;
 }
 
@@ -52,5 +53,7 @@ extern "C" sfd_status_t sfd_params_validate(const sfd_params_t *p) {
     if (p->evidence_frames < 0 || p->evidence_frames > SFD_MAX_WINDOW) return SFD_ERR_INVAL;
     if (!(p->both_parity_share > 0.0 && p->both_parity_share < 1.0)) return SFD_ERR_INVAL;
     if (!(p->alarm_hold_ratio > 0.0 && p->alarm_hold_ratio <= 1.0)) return SFD_ERR_INVAL;
+    if (p->alarm_hold_frames < 1 || p->alarm_hold_frames > SFD_ALARM_HOLD_MAX_FRAMES)
+        return SFD_ERR_INVAL;
     return SFD_OK;
 }

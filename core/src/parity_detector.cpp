@@ -513,10 +513,11 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // it each test runs at alpha / 2, so a clean feature is flagged with probability <= alpha.
 // False when the filter does not hold the window's frames (nothing written: the caller falls
 // back to the group test).
-// The alarm hold (parity_space.md "Alarm hold"): a track whose previous observation this test
-// flagged is tested against alarm_hold_ratio times the window test's threshold. A moving point
-// or a drift is inconsistent over its whole life, while its 3-frame window alone passes in a
-// fraction of frames; a clean track pays the lower threshold only after a false alarm.
+// The alarm hold (parity_space.md "Alarm hold"): a track whose last alarm_hold_frames
+// observations this test flagged is tested against alarm_hold_ratio times the window test's
+// threshold. A moving point is inconsistent over its whole life, while its 3-frame window alone
+// passes in a fraction of frames; a clean track pays the lower threshold only after that many
+// false alarms in a row.
 __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t *filter,
                                                 sfd_window_scratch_t *scratch,
                                                 const sfd_extrinsics_t &ext, sfd_verdict_t *out) {
@@ -544,6 +545,7 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
     // the previous frame (newest.prev indexes it; the window check above means L >= 2 frames)
     const sfd_parity_frame_t &pf = det.frames[ring_index(det, 1)];
     const double hold = det.params.alarm_hold_ratio;
+    const int hold_after = det.params.alarm_hold_frames;
     const double scale = det.params.pixel_noise_adapt ? det.noise_scale : 1.0;
     float *u = det.stat_scratch;  // gamma over the median of chi2(dof), per tested feature
     int n_u = 0;
@@ -577,7 +579,11 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
             v->reason = (st == SFD_ERR_NUMERIC) ? SFD_REASON_RANK : SFD_REASON_NUMERIC;
             continue;
         }
-        const bool held = hold < 1.0 && newest.prev >= 0 && pf.obs[newest.prev].alarm != 0;
+        // consecutive alarms of the track before this observation
+        const int run_before = newest.prev >= 0 ? pf.obs[newest.prev].alarm : 0;
+        const bool held = hold < 1.0 && run_before >= hold_after;
+        const int8_t alarm_run = static_cast<int8_t>(
+            run_before >= SFD_ALARM_HOLD_MAX_FRAMES ? SFD_ALARM_HOLD_MAX_FRAMES : run_before + 1);
         double thr = tab.threshold[dofs[0]] * (held ? hold : 1.0);
         u[n_u++] = static_cast<float>(gam[0] / det.chi2_median.threshold[dofs[0]]);
         if (gam[0] > thr) {
@@ -587,7 +593,7 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
             v->fault_kind = SFD_FAULT_UNKNOWN;
             out->flags |= SFD_FLAG_PARITY_ALARM;
             newest.segment = 1;  // an alarm: the track's segment starts again here
-            newest.alarm = 1;
+            newest.alarm = alarm_run;
             continue;
         }
         set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, dofs[0], gam[0], thr);
@@ -597,7 +603,7 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
             set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_EVIDENCE, dofs[1], gam[1], thr);
             v->fault_kind = SFD_FAULT_DRIFT;
             out->flags |= SFD_FLAG_PARITY_ALARM;
-            newest.alarm = 1;
+            newest.alarm = alarm_run;
         }
     }
     update_noise_scale(det, u, n_u);

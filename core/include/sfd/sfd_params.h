@@ -60,13 +60,19 @@ typedef struct {
                                     gets; OPRF, which then judges parity's survivors, gets the
                                     rest, so a clean feature is flagged with probability at most
                                     false_alarm_rate (a weighted Bonferroni split); (0, 1) */
-    double alarm_hold_ratio;   /**< with the filter's translation: a track whose previous
-                                    observation the test flagged is tested against this fraction
-                                    of the window test's threshold (a two-threshold, hysteresis
-                                    rule: a moving point or a drift stays flagged through the
-                                    frames its window alone would pass; core/docs/parity_space.md
-                                    "Alarm hold"); 1: off; (0, 1] */
+    double alarm_hold_ratio;   /**< with the filter's translation: a track whose last
+                                    alarm_hold_frames observations the test flagged is tested
+                                    against this fraction of the window test's threshold (a
+                                    two-threshold, hysteresis rule: a moving point stays flagged
+                                    through the frames its window alone would pass;
+                                    core/docs/parity_space.md "Alarm hold"); 1: off; (0, 1] */
+    int alarm_hold_frames;     /**< consecutive flagged observations that start the hold,
+                                    1..SFD_ALARM_HOLD_MAX_FRAMES */
 } sfd_params_t;
+
+/** Longest run of flagged observations alarm_hold_frames may ask for (the detector counts a
+ *  track's consecutive alarms in one byte). */
+#define SFD_ALARM_HOLD_MAX_FRAMES 100
 
 /** @brief Fills @p p with the defaults: method PARITY, 1 px, alpha 0.01, L = 3, n = 3, unknown
  *         translation, exact covariance (22), isolation on, depth 10 m with variance 0, 100

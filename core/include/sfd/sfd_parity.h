@@ -142,9 +142,10 @@ enum {
     SFD_REASON_EVIDENCE = 10,    /**< SPURIOUS: its window passed, but the test over its
                                       observations since its last alarm (up to evidence_frames
                                       frames) failed: slow drift or a moving point */
-    SFD_REASON_ALARM_HOLD = 11   /**< SPURIOUS: the track's previous observation was flagged
-                                      and its window test exceeds alarm_hold_ratio times the
-                                      threshold (the statistic is relative to that threshold) */
+    SFD_REASON_ALARM_HOLD = 11   /**< SPURIOUS: the track's last alarm_hold_frames
+                                      observations were flagged and its window test exceeds
+                                      alarm_hold_ratio times the threshold (the statistic is
+                                      relative to that threshold) */
 };
 
 /** Fault signature of a SPURIOUS feature (needs L >= 3 to tell them apart). */
@@ -221,8 +222,9 @@ typedef struct {
     int16_t run;       /* consecutive frames observed, this one included (saturating) */
     int8_t segment;    /* observations since the track's last alarm, this one included
                           (saturating at SFD_MAX_WINDOW <= 127; the evidence test's window) */
-    int8_t alarm;      /* 1: the test with the filter's translation flagged this observation
-                          (the next one's alarm hold, sfd_params_t alarm_hold_ratio) */
+    int8_t alarm;      /* consecutive observations of the track the test with the filter's
+                          translation flagged, ending at this one (0: not flagged; saturating
+                          at SFD_ALARM_HOLD_MAX_FRAMES): the next one's alarm hold */
     int8_t valid;      /* 1 usable, 0 rejected input */
     int8_t prior; /* 1: depth_m, depth_var_m2 are the wire's prior; 0: the configured default */
 } sfd_parity_obs_t;
@@ -314,10 +316,10 @@ sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
  * every feature tracked through at least 2 of the L frames is tested alone, over min(its run,
  * L) frames, with sfd_window_test_track(): the
  * filter's poses and their covariance, the newest depth prior as a measurement, the threshold
- * chi2(dof, 1 - alpha), or alarm_hold_ratio times it for a track whose previous observation
- * this test flagged (SFD_REASON_ALARM_HOLD when that flags it). Reason SFD_REASON_FEATURE_TEST
- * otherwise; a feature that cannot be triangulated is
- * UNTESTED (SFD_REASON_RANK). Otherwise (no filter, not started, a frame it did not clone, or
+ * chi2(dof, 1 - alpha), or alarm_hold_ratio times it for a track whose last alarm_hold_frames
+ * observations this test flagged (SFD_REASON_ALARM_HOLD when that flags it). Reason
+ * SFD_REASON_FEATURE_TEST otherwise; a feature that cannot be triangulated is UNTESTED
+ * (SFD_REASON_RANK). Otherwise (no filter, not started, a frame it did not clone, or
  * translation_known = 0) this is sfd_parity_push_frame(), and with translation_known the verdict
  * carries SFD_FLAG_TRANSLATION_UNKNOWN when the unknown-translation test judged the frame.
  *
