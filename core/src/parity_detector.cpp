@@ -584,12 +584,15 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         const bool held = hold < 1.0 && run_before >= hold_after;
         const int8_t alarm_run = static_cast<int8_t>(
             run_before >= SFD_ALARM_HOLD_MAX_FRAMES ? SFD_ALARM_HOLD_MAX_FRAMES : run_before + 1);
-        double thr = tab.threshold[dofs[0]] * (held ? hold : 1.0);
+        const double full = tab.threshold[dofs[0]];
+        double thr = held ? hold * full : full;  // the threshold that decides
         u[n_u++] = static_cast<float>(gam[0] / det.chi2_median.threshold[dofs[0]]);
         if (gam[0] > thr) {
+            // ALARM_HOLD only where the hold decided (the full threshold would have passed it)
+            const bool by_hold = !(gam[0] > full);
             set_verdict(v, SFD_VERDICT_SPURIOUS,
-                        held ? SFD_REASON_ALARM_HOLD : SFD_REASON_FEATURE_TEST, dofs[0], gam[0],
-                        thr);
+                        by_hold ? SFD_REASON_ALARM_HOLD : SFD_REASON_FEATURE_TEST, dofs[0], gam[0],
+                        by_hold ? thr : full);
             v->fault_kind = SFD_FAULT_UNKNOWN;
             out->flags |= SFD_FLAG_PARITY_ALARM;
             newest.segment = 1;  // an alarm: the track's segment starts again here

@@ -76,7 +76,8 @@ typedef struct {
 
 /** @brief Fills @p p with the defaults: method PARITY, 1 px, alpha 0.01, L = 3, n = 3, unknown
  *         translation, exact covariance (22), isolation on, depth 10 m with variance 0, 100
- * hypotheses, confidence 0.99, zero gyro bias, 50 ms IMU gap, seed 1.
+ * hypotheses, confidence 0.99, zero gyro bias, 50 ms IMU gap, seed 1, no alarm hold (ratio 1,
+ *         after 1 alarm).
  *  @return SFD_OK; SFD_ERR_INVAL for null. */
 sfd_status_t sfd_params_default(sfd_params_t *p);
 

@@ -144,8 +144,9 @@ enum {
                                       frames) failed: slow drift or a moving point */
     SFD_REASON_ALARM_HOLD = 11   /**< SPURIOUS: the track's last alarm_hold_frames
                                       observations were flagged and its window test exceeds
-                                      alarm_hold_ratio times the threshold (the statistic is
-                                      relative to that threshold) */
+                                      alarm_hold_ratio times the threshold but not the threshold
+                                      (the statistic is relative to the lowered threshold, as a
+                                      held CONSISTENT verdict's is: > 1 still means rejected) */
 };
 
 /** Fault signature of a SPURIOUS feature (needs L >= 3 to tell them apart). */
