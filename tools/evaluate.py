@@ -56,7 +56,8 @@ GRID = {"alpha": ("--false-alarm-rate", "false_alarm_rate"),
         "pixel-sigma": ("--pixel-sigma-px", "pixel_sigma_px"),
         "depth-default": ("--default-depth-m", "default_depth_m"),
         "hold": ("--alarm-hold-ratio", "alarm_hold_ratio"),
-        "hold-frames": ("--alarm-hold-frames", "alarm_hold_frames")}
+        "hold-frames": ("--alarm-hold-frames", "alarm_hold_frames"),
+        "hold-max": ("--alarm-hold-max-statistic", "alarm_hold_max_statistic")}
 PRESETS = {
     "quick": dict(scenarios=["mistracking", "moving-object"], seeds="1,2",
                   methods=",".join(METHODS), grid=["alpha=0.01,0.1"], frames=200),

@@ -26,6 +26,7 @@ extern "C" sfd_status_t sfd_params_default(sfd_params_t *p) {
     p->both_parity_share = 0.9;
     p->alarm_hold_ratio = 1.0;
     p->alarm_hold_frames = 1;
+    p->alarm_hold_max_statistic = 3.0;
     return SFD_OK;
 }
 
@@ -54,6 +55,8 @@ extern "C" sfd_status_t sfd_params_validate(const sfd_params_t *p) {
     if (!(p->both_parity_share > 0.0 && p->both_parity_share < 1.0)) return SFD_ERR_INVAL;
     if (!(p->alarm_hold_ratio > 0.0 && p->alarm_hold_ratio <= 1.0)) return SFD_ERR_INVAL;
     if (p->alarm_hold_frames < 1 || p->alarm_hold_frames > SFD_ALARM_HOLD_MAX_FRAMES)
+        return SFD_ERR_INVAL;
+    if (!(p->alarm_hold_max_statistic >= 1.0 && p->alarm_hold_max_statistic <= 1e6))
         return SFD_ERR_INVAL;
     return SFD_OK;
 }

@@ -546,6 +546,7 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
     const sfd_parity_frame_t &pf = det.frames[ring_index(det, 1)];
     const double hold = det.params.alarm_hold_ratio;
     const int hold_after = det.params.alarm_hold_frames;
+    const double step_stat = det.params.alarm_hold_max_statistic;
     const double scale = det.params.pixel_noise_adapt ? det.noise_scale : 1.0;
     float *u = det.stat_scratch;  // gamma over the median of chi2(dof), per tested feature
     int n_u = 0;
@@ -596,7 +597,9 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
             v->fault_kind = SFD_FAULT_UNKNOWN;
             out->flags |= SFD_FLAG_PARITY_ALARM;
             newest.segment = 1;  // an alarm: the track's segment starts again here
-            newest.alarm = alarm_run;
+            // a step's alarm (far above the threshold) breaks the run of alarms: after a jump
+            // the track follows another point and its next windows are clean
+            newest.alarm = (gam[0] < step_stat * full) ? alarm_run : 0;
             continue;
         }
         set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, dofs[0], gam[0], thr);
@@ -606,7 +609,7 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
             set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_EVIDENCE, dofs[1], gam[1], thr);
             v->fault_kind = SFD_FAULT_DRIFT;
             out->flags |= SFD_FLAG_PARITY_ALARM;
-            newest.alarm = alarm_run;
+            newest.alarm = (gam[1] < step_stat * thr) ? alarm_run : 0;
         }
     }
     update_noise_scale(det, u, n_u);

@@ -117,6 +117,8 @@ std::vector<BadValue> bad_values() {
          "alarm_hold_frames: 0 is not in 1..100"},
         {"alarm_hold_frames", [](C &c) { c.node.params.alarm_hold_frames = 101; },
          "alarm_hold_frames: 101 is not in 1..100"},
+        {"alarm_hold_max_statistic", [](C &c) { c.node.params.alarm_hold_max_statistic = 0.5; },
+         "alarm_hold_max_statistic: 0.5 is not in [1, 1e+06]"},
         {"filter.enabled", [](C &c) { c.node.nav.enabled = 7; }, "filter.enabled: 7 is not 0 or 1"},
         {"filter.gyro_noise_rad_s_rthz",
          [](C &c) { c.node.nav.noise.gyro_noise_rad_s_rthz = -1e-4; },
@@ -275,6 +277,7 @@ void accepted_configurations_start_a_node(void **) {
         [](C &c) {
             c.node.params.alarm_hold_ratio = 1e-6;
             c.node.params.alarm_hold_frames = 1;
+            c.node.params.alarm_hold_max_statistic = 1e6;
         },
         [](C &c) { c.node.params.max_imu_gap_us = 1; },
         [](C &c) { c.node.params.seed = UINT64_MAX; },

@@ -70,6 +70,8 @@ static void params_out_of_range_rejected(void **state) {
     EXPECT_FIELD(alarm_hold_ratio, NAN, SFD_ERR_INVAL);
     EXPECT_FIELD(alarm_hold_frames, 0, SFD_ERR_INVAL);
     EXPECT_FIELD(alarm_hold_frames, SFD_ALARM_HOLD_MAX_FRAMES + 1, SFD_ERR_INVAL);
+    EXPECT_FIELD(alarm_hold_max_statistic, 0.999, SFD_ERR_INVAL);
+    EXPECT_FIELD(alarm_hold_max_statistic, INFINITY, SFD_ERR_INVAL);
 }
 
 /* GIVEN boundary values THEN they are accepted. */
@@ -85,6 +87,7 @@ static void params_boundaries_accepted(void **state) {
     EXPECT_FIELD(default_depth_var_m2, 0.0, SFD_OK);
     EXPECT_FIELD(alarm_hold_ratio, 1.0, SFD_OK);
     EXPECT_FIELD(alarm_hold_frames, SFD_ALARM_HOLD_MAX_FRAMES, SFD_OK);
+    EXPECT_FIELD(alarm_hold_max_statistic, 1.0, SFD_OK);
 }
 
 int main(void) {

@@ -614,6 +614,7 @@ typedef struct {
 /* alarm_hold_ratio and alarm_hold_frames of drift_run (the defaults unless a test sets them) */
 static double g_hold = -1.0;
 static int g_hold_frames = -1;
+static double g_hold_max = -1.0; /* alarm_hold_max_statistic */
 
 static void drift_run(double drift_px, drift_run_t *out) {
     sfd_pipeline_config_t cfg;
@@ -621,6 +622,7 @@ static void drift_run(double drift_px, drift_run_t *out) {
     cfg.params.pixel_sigma_px = 1.0;
     if (g_hold > 0.0) cfg.params.alarm_hold_ratio = g_hold;
     if (g_hold_frames > 0) cfg.params.alarm_hold_frames = g_hold_frames;
+    if (g_hold_max > 0.0) cfg.params.alarm_hold_max_statistic = g_hold_max;
     assert_int_equal(cfg.params.translation_known, 1);
     assert_int_equal(cfg.params.pixel_noise_adapt, 1);
     assert_int_equal(cfg.params.evidence_frames, SFD_MAX_WINDOW);
@@ -739,7 +741,8 @@ static void parity_calibrates_its_pixel_noise_and_sees_a_drift(void **state) {
  * WHEN parity runs with the alarm hold (alarm_hold_ratio 0.5, after 1 and after 3 alarms in a
  * row) and without it (ratio 1, the default) THEN the hold flags observations
  * (SFD_REASON_ALARM_HOLD), each one on a track whose last alarm_hold_frames observations were
- * flagged, fewer after 3 than after 1; and a clean feature is flagged (by any of the tests:
+ * flagged, fewer after 3 than after 1, none when every alarm counts as a step
+ * (alarm_hold_max_statistic 1); and a clean feature is flagged (by any of the tests:
  * window, evidence, hold) at a rate at most alpha inside the 99 % binomial interval (a third of
  * the tests counted as independent). Printed: the window test's own clean rate, whose share of
  * alpha is alpha / 2 with the evidence test on (the hold spends part of the other half's
@@ -748,13 +751,15 @@ static void parity_calibrates_its_pixel_noise_and_sees_a_drift(void **state) {
  * this drift), one reason the hold is off by default (docs/evaluation.md "Alarm hold"). */
 static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(void **state) {
     (void)state;
-    drift_run_t runs[3]; /* off, on after 1 alarm, on after 3 */
-    const double ratios[3] = {1.0, 0.5, 0.5};
-    const int after[3] = {1, 1, 3};
+    drift_run_t runs[4]; /* off, on after 1 alarm, on after 3, on with every alarm a step */
+    const double ratios[4] = {1.0, 0.5, 0.5, 0.5};
+    const int after[4] = {1, 1, 3, 1};
+    const double step_stat[4] = {3.0, 3.0, 3.0, 1.0};
     const double alpha = 0.01;
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < 4; ++k) {
         g_hold = ratios[k];
         g_hold_frames = after[k];
+        g_hold_max = step_stat[k];
         drift_run(1.0, &runs[k]);
         const drift_run_t *r = &runs[k];
         const double rate = (double)r->clean_flagged / (double)r->clean_tested;
@@ -773,8 +778,10 @@ static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(v
     }
     g_hold = -1.0;
     g_hold_frames = -1;
+    g_hold_max = -1.0;
     assert_true(runs[1].hold_flags > 0);
     assert_true(runs[2].hold_flags > 0 && runs[2].hold_flags < runs[1].hold_flags);
+    assert_int_equal(runs[3].hold_flags, 0);
 }
 
 int main(void) {

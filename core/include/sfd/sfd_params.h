@@ -68,6 +68,10 @@ typedef struct {
                                     core/docs/parity_space.md "Alarm hold"); 1: off; (0, 1] */
     int alarm_hold_frames;     /**< consecutive flagged observations that start the hold,
                                     1..SFD_ALARM_HOLD_MAX_FRAMES */
+    double alarm_hold_max_statistic; /**< an alarm whose statistic exceeds this many times its
+                                          threshold is a step (a jump, a mismatch: the track
+                                          then follows another point) and neither starts nor
+                                          continues the hold; [1, 1e6] */
 } sfd_params_t;
 
 /** Longest run of flagged observations alarm_hold_frames may ask for (the detector counts a
@@ -77,7 +81,7 @@ typedef struct {
 /** @brief Fills @p p with the defaults: method PARITY, 1 px, alpha 0.01, L = 3, n = 3, unknown
  *         translation, exact covariance (22), isolation on, depth 10 m with variance 0, 100
  * hypotheses, confidence 0.99, zero gyro bias, 50 ms IMU gap, seed 1, no alarm hold (ratio 1,
- *         after 1 alarm).
+ *         after 1 alarm, steps above 3 times the threshold).
  *  @return SFD_OK; SFD_ERR_INVAL for null. */
 sfd_status_t sfd_params_default(sfd_params_t *p);
 

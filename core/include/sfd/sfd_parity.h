@@ -224,8 +224,9 @@ typedef struct {
     int8_t segment;    /* observations since the track's last alarm, this one included
                           (saturating at SFD_MAX_WINDOW <= 127; the evidence test's window) */
     int8_t alarm;      /* consecutive observations of the track the test with the filter's
-                          translation flagged, ending at this one (0: not flagged; saturating
-                          at SFD_ALARM_HOLD_MAX_FRAMES): the next one's alarm hold */
+                          translation flagged below alarm_hold_max_statistic times the
+                          threshold, ending at this one (0: not flagged, or a step's alarm;
+                          saturating at SFD_ALARM_HOLD_MAX_FRAMES): the next one's alarm hold */
     int8_t valid;      /* 1 usable, 0 rejected input */
     int8_t prior; /* 1: depth_m, depth_var_m2 are the wire's prior; 0: the configured default */
 } sfd_parity_obs_t;
