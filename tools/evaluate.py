@@ -57,7 +57,8 @@ GRID = {"alpha": ("--false-alarm-rate", "false_alarm_rate"),
         "depth-default": ("--default-depth-m", "default_depth_m"),
         "hold": ("--alarm-hold-ratio", "alarm_hold_ratio"),
         "hold-frames": ("--alarm-hold-frames", "alarm_hold_frames"),
-        "hold-max": ("--alarm-hold-max-statistic", "alarm_hold_max_statistic")}
+        "hold-max": ("--alarm-hold-max-statistic", "alarm_hold_max_statistic"),
+        "hold-alpha": ("--alarm-hold-alpha-scale", "alarm_hold_alpha_scale")}
 PRESETS = {
     "quick": dict(scenarios=["mistracking", "moving-object"], seeds="1,2",
                   methods=",".join(METHODS), grid=["alpha=0.01,0.1"], frames=200),
@@ -389,10 +390,13 @@ def plots(a, rows, ref, grid):
     # Precision vs strict recall along the alpha sweep (pooled over seeds).
     fig, axs = plt.subplots(nrow, ncol, figsize=(fig_w, 4.2 * nrow + 0.9), squeeze=False)
     other = {k: v for k, v in ref.items() if k != "alpha"}
-    alphas = grid.get("alpha", [ref.get("alpha")])
+    # Without an alpha sweep the rows have no alpha column: one point per method, at the
+    # configuration's alpha.
+    alphas = grid.get("alpha", [None])
     for ax, sc in zip(axs.flat, scs):
         for m in a.methods:
-            pts = [(pooled_pr(at_ref(rows, dict(other, scenario=sc, method=m, alpha=v))), v)
+            pts = [(pooled_pr(at_ref(rows, dict(other, scenario=sc, method=m,
+                                                **({} if v is None else {"alpha": v})))), v)
                    for v in alphas]
             pts = [(r, p, v) for (p, r, _), v in pts if p is not None and r is not None]
             if not pts:
@@ -408,9 +412,10 @@ def plots(a, rows, ref, grid):
         ax.axis("off")
     handles = [plt.Line2D([], [], color=colors[m], marker="o", label=m) for m in a.methods]
     fig.legend(handles=[h for h in handles if h.get_label() != "none"], **legend_kw)
-    fig.suptitle("Precision vs strict recall, pooled over %d seeds; α = %s (ringed: %s); "
-                 "none: no precision" % (len(a.seeds), ", ".join(alphas), ref.get("alpha")),
-                 fontsize=10)
+    sweep = ("α = %s (ringed: %s)" % (", ".join(grid["alpha"]), ref["alpha"])
+             if "alpha" in grid else "at the configuration's α (no α sweep)")
+    fig.suptitle("Precision vs strict recall, pooled over %d seeds; %s; none: no precision"
+                 % (len(a.seeds), sweep), fontsize=10)
     fig.tight_layout(rect=(0, 0.06, 1, 0.96))
     fig.savefig(os.path.join(a.out, "pr_curves.png"), dpi=110)
     plt.close(fig)

@@ -27,6 +27,7 @@ extern "C" sfd_status_t sfd_params_default(sfd_params_t *p) {
     p->alarm_hold_ratio = 1.0;
     p->alarm_hold_frames = 1;
     p->alarm_hold_max_statistic = 3.0;
+    p->alarm_hold_alpha_scale = 0.4;
     return SFD_OK;
 }
 
@@ -57,6 +58,8 @@ extern "C" sfd_status_t sfd_params_validate(const sfd_params_t *p) {
     if (p->alarm_hold_frames < 1 || p->alarm_hold_frames > SFD_ALARM_HOLD_MAX_FRAMES)
         return SFD_ERR_INVAL;
     if (!(p->alarm_hold_max_statistic >= 1.0 && p->alarm_hold_max_statistic <= 1e6))
+        return SFD_ERR_INVAL;
+    if (!(p->alarm_hold_alpha_scale > 0.0 && p->alarm_hold_alpha_scale <= 1.0))
         return SFD_ERR_INVAL;
     return SFD_OK;
 }

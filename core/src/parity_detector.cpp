@@ -517,7 +517,10 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // observations this test flagged is tested against alarm_hold_ratio times the window test's
 // threshold. A moving point is inconsistent over its whole life, while its 3-frame window alone
 // passes in a fraction of frames; a clean track pays the lower threshold only after that many
-// false alarms in a row.
+// false alarms in a row. Consecutive windows share L - 1 frames, so a clean track's false alarm
+// is often repeated under the lower threshold: with the hold on, both tests run at
+// alarm_hold_alpha_scale times their share of alpha (det.chi2_window), a factor measured on
+// clean logs (parity_space.md "Alarm hold"), not derived.
 __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t *filter,
                                                 sfd_window_scratch_t *scratch,
                                                 const sfd_extrinsics_t &ext, sfd_verdict_t *out) {
@@ -540,7 +543,7 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         ++m_max;
     }
     const bool evidence = want > L;
-    const sfd_chi2_table_t &tab = evidence ? det.chi2_half : det.chi2;
+    const sfd_chi2_table_t &tab = det.chi2_window;
     sfd_parity_frame_t &nf = det.frames[det.head];
     // the previous frame (newest.prev indexes it; the window check above means L >= 2 frames)
     const sfd_parity_frame_t &pf = det.frames[ring_index(det, 1)];
@@ -639,7 +642,14 @@ extern "C" sfd_status_t sfd_parity_init(sfd_parity_t *det, const sfd_params_t *p
     if (t != SFD_OK) return t;
     const sfd_status_t tm = sfd_chi2_table_init(&det->chi2_median, 0.5);
     if (tm != SFD_OK) return tm;
-    const sfd_status_t th = sfd_chi2_table_init(&det->chi2_half, 0.5 * params->false_alarm_rate);
+    // The tests with the filter's translation (test_with_filter): alpha / 2 each for the window
+    // and the evidence test, alpha for the window test alone; with the alarm hold on, a share
+    // alarm_hold_alpha_scale of that (the hold's repeats of a clean track's alarm take the rest).
+    const bool evidence = params->evidence_frames > params->window_frames;
+    const double alpha_window =
+        (evidence ? 0.5 : 1.0) * params->false_alarm_rate *
+        (params->alarm_hold_ratio < 1.0 ? params->alarm_hold_alpha_scale : 1.0);
+    const sfd_status_t th = sfd_chi2_table_init(&det->chi2_window, alpha_window);
     if (th != SFD_OK) return th;
     det->noise_scale = 1.0;
     det->params = *params;

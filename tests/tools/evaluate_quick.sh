@@ -3,7 +3,9 @@
 # tools.evaluate_quick: tools/evaluate.py's quick preset on a Dask LocalCluster (2 workers), then
 # serially, and checks: the deterministic columns (all but time_*) of every row
 # are equal, the expected rows are there, summary.md and the three PNGs are written, the CSV holds
-# sfd-replay's own numbers (one JSON re-read), bad usage exits 2 and a failing run exits 1.
+# sfd-replay's own numbers (one JSON re-read), bad usage exits 2 and a failing run exits 1; a
+# sweep whose grid has no alpha (here the alarm hold's) writes its rows and plots too (it
+# crashed in the precision-recall plot before).
 # Usage: evaluate_quick.sh BUILD_DIR PYTHON
 set -euo pipefail
 build="$(cd "$1" && pwd)"
@@ -39,6 +41,13 @@ grep -q 'FAILED.*sfd-replay.*--false-alarm-rate 0.9' "$tmp/fail.err" || {
   cat "$tmp/fail.err" >&2
   exit 1
 }
+
+"${ev[@]}" --serial --scenarios mistracking --seeds 1 --methods parity --frames 40 \
+  --grid hold=1,0.3 --out "$tmp/hold" >/dev/null
+for f in results.csv summary.md pr_curves.png ate.png kind_recall.png; do
+  [ -s "$tmp/hold/$f" ] || { echo "sweep without alpha: no $f" >&2; exit 1; }
+done
+[ "$(wc -l <"$tmp/hold/results.csv")" -eq 3 ] || { echo "sweep without alpha: rows" >&2; exit 1; }
 
 "$py" - "$tmp" <<'PY'
 import csv, json, math, os, sys

@@ -614,7 +614,8 @@ typedef struct {
 /* alarm_hold_ratio and alarm_hold_frames of drift_run (the defaults unless a test sets them) */
 static double g_hold = -1.0;
 static int g_hold_frames = -1;
-static double g_hold_max = -1.0; /* alarm_hold_max_statistic */
+static double g_hold_max = -1.0;   /* alarm_hold_max_statistic */
+static double g_hold_scale = -1.0; /* alarm_hold_alpha_scale */
 
 static void drift_run(double drift_px, drift_run_t *out) {
     sfd_pipeline_config_t cfg;
@@ -623,6 +624,7 @@ static void drift_run(double drift_px, drift_run_t *out) {
     if (g_hold > 0.0) cfg.params.alarm_hold_ratio = g_hold;
     if (g_hold_frames > 0) cfg.params.alarm_hold_frames = g_hold_frames;
     if (g_hold_max > 0.0) cfg.params.alarm_hold_max_statistic = g_hold_max;
+    if (g_hold_scale > 0.0) cfg.params.alarm_hold_alpha_scale = g_hold_scale;
     assert_int_equal(cfg.params.translation_known, 1);
     assert_int_equal(cfg.params.pixel_noise_adapt, 1);
     assert_int_equal(cfg.params.evidence_frames, SFD_MAX_WINDOW);
@@ -742,35 +744,46 @@ static void parity_calibrates_its_pixel_noise_and_sees_a_drift(void **state) {
  * row) and without it (ratio 1, the default) THEN the hold flags observations
  * (SFD_REASON_ALARM_HOLD), each one on a track whose last alarm_hold_frames observations were
  * flagged, fewer after 3 than after 1, none when every alarm counts as a step
- * (alarm_hold_max_statistic 1); and a clean feature is flagged (by any of the tests:
- * window, evidence, hold) at a rate at most alpha inside the 99 % binomial interval (a third of
- * the tests counted as independent). Printed: the window test's own clean rate, whose share of
- * alpha is alpha / 2 with the evidence test on (the hold spends part of the other half's
- * slack), and the share of a drifting track's observations flagged after its first flag: lower
- * with the hold here (every window alarm restarts the evidence test's segment, which catches
- * this drift), one reason the hold is off by default (docs/evaluation.md "Alarm hold"). */
+ * (alarm_hold_max_statistic 1); with the hold on, the window and evidence tests' threshold is
+ * the chi-square quantile at alarm_hold_alpha_scale (0.4 by default) times alpha / 2, at
+ * alpha / 2 with it off or with the scale 1; and a clean feature is flagged (by any of the
+ * tests: window, evidence, hold) at a rate at most alpha inside the 99 % binomial interval (a
+ * third of the tests counted as independent), the uncalibrated hold (scale 1) included here.
+ * Printed: the window test's own clean rate, and the share of a drifting track's observations
+ * flagged after its first flag: lower with the hold here (every window alarm restarts the
+ * evidence test's segment, which catches this drift; docs/evaluation.md "Alarm hold"). */
 static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(void **state) {
     (void)state;
-    drift_run_t runs[4]; /* off, on after 1 alarm, on after 3, on with every alarm a step */
-    const double ratios[4] = {1.0, 0.5, 0.5, 0.5};
-    const int after[4] = {1, 1, 3, 1};
-    const double step_stat[4] = {3.0, 3.0, 3.0, 1.0};
+    /* off, on after 1 alarm, on after 3, on with every alarm a step, on without the alpha scale */
+    drift_run_t runs[5];
+    const double ratios[5] = {1.0, 0.5, 0.5, 0.5, 0.5};
+    const int after[5] = {1, 1, 3, 1, 1};
+    const double step_stat[5] = {3.0, 3.0, 3.0, 1.0, 3.0};
+    const double scales[5] = {0.4, 0.4, 0.4, 0.4, 1.0};
     const double alpha = 0.01;
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < 5; ++k) {
         g_hold = ratios[k];
         g_hold_frames = after[k];
         g_hold_max = step_stat[k];
+        g_hold_scale = scales[k];
         drift_run(1.0, &runs[k]);
         const drift_run_t *r = &runs[k];
+        /* the tests' thresholds: alpha / 2 each, times the scale while the hold is on */
+        const double alpha_window = 0.5 * alpha * (ratios[k] < 1.0 ? scales[k] : 1.0);
+        for (int dof = 1; dof <= 8; ++dof) {
+            double q = 0.0;
+            assert_status(sfd_chi2_quantile_upper(alpha_window, dof, &q), SFD_OK);
+            assert_near(g_p.parity.chi2_window.threshold[dof], q, 1e-9 * q);
+        }
         const double rate = (double)r->clean_flagged / (double)r->clean_tested;
         const double half = 2.576 * sqrt(alpha * (1.0 - alpha) / ((double)r->clean_tested / 3.0));
         printf(
-            "  hold ratio %.1f after %d: %ld hold flags (%ld after fewer flags in a row); "
-            "clean features flagged %.4f of %ld (alpha %.2f, 99%% interval +-%.4f), by the "
-            "window test %.4f (its share alpha / 2); drifting tracks after their first flag "
+            "  hold ratio %.1f after %d, alpha scale %.1f: %ld hold flags (%ld after fewer "
+            "flags in a row); clean features flagged %.4f of %ld (alpha %.2f, 99%% interval "
+            "+-%.4f), by the window test %.4f (at %.4f); drifting tracks after their first flag "
             "%.3f of %ld flagged\n",
-            ratios[k], after[k], r->hold_flags, r->hold_unearned, rate, r->clean_tested, alpha,
-            half, (double)r->alarms / (double)r->tests,
+            ratios[k], after[k], scales[k], r->hold_flags, r->hold_unearned, rate, r->clean_tested,
+            alpha, half, (double)r->alarms / (double)r->tests, alpha_window,
             (double)r->drift_flags / (double)r->drift_after_first, r->drift_after_first);
         assert_true(r->clean_tested > 4000 && r->drift_after_first > 100);
         assert_true(rate <= alpha + half);
@@ -779,6 +792,7 @@ static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(v
     g_hold = -1.0;
     g_hold_frames = -1;
     g_hold_max = -1.0;
+    g_hold_scale = -1.0;
     assert_true(runs[1].hold_flags > 0);
     assert_true(runs[2].hold_flags > 0 && runs[2].hold_flags < runs[1].hold_flags);
     assert_int_equal(runs[3].hold_flags, 0);

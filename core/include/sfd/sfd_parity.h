@@ -250,7 +250,9 @@ typedef struct {
     sfd_camera_t camera;
     sfd_chi2_table_t chi2;
     sfd_chi2_table_t chi2_median; /* medians of chi2(k): the pixel noise scale's reference */
-    sfd_chi2_table_t chi2_half;   /* at alpha / 2: the two tests of the evidence mode */
+    sfd_chi2_table_t chi2_window; /* the tests with the filter's translation: at alpha / 2
+                                     with the evidence test (alpha without), times
+                                     alarm_hold_alpha_scale with the alarm hold on */
     double noise_scale;           /* pixel noise variance factor (pixel_noise_adapt), 1 at init */
     float stat_scratch[SFD_MAX_FEATURES]; /* one frame's statistics for the scale (no content
                                              kept between frames) */
