@@ -27,7 +27,7 @@ extern "C" sfd_status_t sfd_params_default(sfd_params_t *p) {
     p->alarm_hold_ratio = 1.0;
     p->alarm_hold_frames = 1;
     p->alarm_hold_max_statistic = 3.0;
-    p->alarm_hold_alpha_scale = 0.4;
+    p->alarm_hold_alpha_scale = 0.3;
     return SFD_OK;
 }
 

@@ -518,9 +518,10 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // threshold. A moving point is inconsistent over its whole life, while its 3-frame window alone
 // passes in a fraction of frames; a clean track pays the lower threshold only after that many
 // false alarms in a row. Consecutive windows share L - 1 frames, so a clean track's false alarm
-// is often repeated under the lower threshold: with the hold on, both tests run at
-// alarm_hold_alpha_scale times their share of alpha (det.chi2_window), a factor measured on
-// clean logs (parity_space.md "Alarm hold"), not derived.
+// is often repeated under the lower threshold: with the hold on, the window test runs at
+// alarm_hold_alpha_scale times its share of alpha (det.chi2_window), a factor measured on clean
+// logs (parity_space.md "Alarm hold"), not derived. The evidence test keeps alpha / 2 and its
+// alarms neither start nor continue the hold (its repeats would not be paid for).
 __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t *filter,
                                                 sfd_window_scratch_t *scratch,
                                                 const sfd_extrinsics_t &ext, sfd_verdict_t *out) {
@@ -543,7 +544,7 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         ++m_max;
     }
     const bool evidence = want > L;
-    const sfd_chi2_table_t &tab = det.chi2_window;
+    const sfd_chi2_table_t &tab = det.chi2_window;  // the evidence test's is det.chi2_half
     sfd_parity_frame_t &nf = det.frames[det.head];
     // the previous frame (newest.prev indexes it; the window check above means L >= 2 frames)
     const sfd_parity_frame_t &pf = det.frames[ring_index(det, 1)];
@@ -607,12 +608,13 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         }
         set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, dofs[0], gam[0], thr);
         if (!have_evidence || dofs[1] < 1 || dofs[1] > SFD_PARITY_MAX_RESIDUAL) continue;
-        thr = tab.threshold[dofs[1]];
+        thr = det.chi2_half.threshold[dofs[1]];
         if (gam[1] > thr) {
             set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_EVIDENCE, dofs[1], gam[1], thr);
             v->fault_kind = SFD_FAULT_DRIFT;
             out->flags |= SFD_FLAG_PARITY_ALARM;
-            newest.alarm = (gam[1] < step_stat * thr) ? alarm_run : 0;
+            // not a window alarm: the run stays 0 (as ingest set it), the next window test is
+            // not held
         }
     }
     update_noise_scale(det, u, n_u);
@@ -643,13 +645,15 @@ extern "C" sfd_status_t sfd_parity_init(sfd_parity_t *det, const sfd_params_t *p
     const sfd_status_t tm = sfd_chi2_table_init(&det->chi2_median, 0.5);
     if (tm != SFD_OK) return tm;
     // The tests with the filter's translation (test_with_filter): alpha / 2 each for the window
-    // and the evidence test, alpha for the window test alone; with the alarm hold on, a share
-    // alarm_hold_alpha_scale of that (the hold's repeats of a clean track's alarm take the rest).
+    // and the evidence test, alpha for the window test alone; with the alarm hold on, the window
+    // test gets a share alarm_hold_alpha_scale of its part (its held repeats take the rest).
     const bool evidence = params->evidence_frames > params->window_frames;
     const double alpha_window =
         (evidence ? 0.5 : 1.0) * params->false_alarm_rate *
         (params->alarm_hold_ratio < 1.0 ? params->alarm_hold_alpha_scale : 1.0);
-    const sfd_status_t th = sfd_chi2_table_init(&det->chi2_window, alpha_window);
+    const sfd_status_t tw = sfd_chi2_table_init(&det->chi2_window, alpha_window);
+    if (tw != SFD_OK) return tw;
+    const sfd_status_t th = sfd_chi2_table_init(&det->chi2_half, 0.5 * params->false_alarm_rate);
     if (th != SFD_OK) return th;
     det->noise_scale = 1.0;
     det->params = *params;

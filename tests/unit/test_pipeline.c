@@ -666,7 +666,10 @@ static void drift_run(double drift_px, drift_run_t *out) {
                 out->hold_flags++;
                 out->hold_unearned += flags_in_a_row[i] < cfg.params.alarm_hold_frames;
             }
-            flags_in_a_row[i] = spurious ? flags_in_a_row[i] + 1 : 0;
+            /* the window test's flags (held ones included) in a row; an evidence flag is not
+             * one */
+            flags_in_a_row[i] =
+                (spurious && r->reason != SFD_REASON_EVIDENCE) ? flags_in_a_row[i] + 1 : 0;
             if (i == JUMP_TRACK || r->status == SFD_VERDICT_UNTESTED) continue;
             if (f >= 60 && !(i >= DRIFT_FIRST && i < DRIFT_FIRST + DRIFT_TRACKS)) {
                 out->clean_tested++;
@@ -742,16 +745,20 @@ static void parity_calibrates_its_pixel_noise_and_sees_a_drift(void **state) {
 /* GIVEN the hovering scene with 20 tracks sliding 1 px per frame (2 sigma) from frame 150
  * WHEN parity runs with the alarm hold (alarm_hold_ratio 0.5, after 1 and after 3 alarms in a
  * row) and without it (ratio 1, the default) THEN the hold flags observations
- * (SFD_REASON_ALARM_HOLD), each one on a track whose last alarm_hold_frames observations were
- * flagged, fewer after 3 than after 1, none when every alarm counts as a step
- * (alarm_hold_max_statistic 1); with the hold on, the window and evidence tests' threshold is
- * the chi-square quantile at alarm_hold_alpha_scale (0.4 by default) times alpha / 2, at
- * alpha / 2 with it off or with the scale 1; and a clean feature is flagged (by any of the
- * tests: window, evidence, hold) at a rate at most alpha inside the 99 % binomial interval (a
- * third of the tests counted as independent), the uncalibrated hold (scale 1) included here.
- * Printed: the window test's own clean rate, and the share of a drifting track's observations
- * flagged after its first flag: lower with the hold here (every window alarm restarts the
- * evidence test's segment, which catches this drift; docs/evaluation.md "Alarm hold"). */
+ * (SFD_REASON_ALARM_HOLD), each one on a track whose last alarm_hold_frames window-test flags
+ * were in a row (an evidence flag does not count), fewer after 3 than after 1 (here none: this
+ * drift is mostly the evidence test's), none when every alarm counts as a step
+ * (alarm_hold_max_statistic 1); with the hold on, the window test's
+ * threshold is the chi-square quantile at alarm_hold_alpha_scale (0.3 by default) times
+ * alpha / 2, at alpha / 2 with it off or with the scale 1, and the evidence test's at alpha / 2
+ * always; and a clean feature is flagged (by any of the tests: window, evidence, hold) at a
+ * rate at most alpha inside the 99 % binomial interval (a third of the tests counted as
+ * independent), the uncalibrated hold (scale 1) included here.
+ * And a drifting track's observations after its first flag are flagged more often with the hold
+ * on than off (0.76 against 0.66 of them when written): with the window test at its lower
+ * level, fewer window alarms restart the evidence test's segment, which catches this drift
+ * (before the evidence test kept its own level, 2026-11-27, the hold lowered that share).
+ * Printed: the window test's own clean rate. */
 static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(void **state) {
     (void)state;
     /* off, on after 1 alarm, on after 3, on with every alarm a step, on without the alpha scale */
@@ -759,7 +766,7 @@ static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(v
     const double ratios[5] = {1.0, 0.5, 0.5, 0.5, 0.5};
     const int after[5] = {1, 1, 3, 1, 1};
     const double step_stat[5] = {3.0, 3.0, 3.0, 1.0, 3.0};
-    const double scales[5] = {0.4, 0.4, 0.4, 0.4, 1.0};
+    const double scales[5] = {0.3, 0.3, 0.3, 0.3, 1.0};
     const double alpha = 0.01;
     for (int k = 0; k < 5; ++k) {
         g_hold = ratios[k];
@@ -768,12 +775,15 @@ static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(v
         g_hold_scale = scales[k];
         drift_run(1.0, &runs[k]);
         const drift_run_t *r = &runs[k];
-        /* the tests' thresholds: alpha / 2 each, times the scale while the hold is on */
+        /* the tests' thresholds: alpha / 2 each, the window test's times the scale while the
+         * hold is on */
         const double alpha_window = 0.5 * alpha * (ratios[k] < 1.0 ? scales[k] : 1.0);
         for (int dof = 1; dof <= 8; ++dof) {
-            double q = 0.0;
+            double q = 0.0, q_half = 0.0;
             assert_status(sfd_chi2_quantile_upper(alpha_window, dof, &q), SFD_OK);
+            assert_status(sfd_chi2_quantile_upper(0.5 * alpha, dof, &q_half), SFD_OK);
             assert_near(g_p.parity.chi2_window.threshold[dof], q, 1e-9 * q);
+            assert_near(g_p.parity.chi2_half.threshold[dof], q_half, 1e-9 * q_half);
         }
         const double rate = (double)r->clean_flagged / (double)r->clean_tested;
         const double half = 2.576 * sqrt(alpha * (1.0 - alpha) / ((double)r->clean_tested / 3.0));
@@ -794,7 +804,9 @@ static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(v
     g_hold_max = -1.0;
     g_hold_scale = -1.0;
     assert_true(runs[1].hold_flags > 0);
-    assert_true(runs[2].hold_flags > 0 && runs[2].hold_flags < runs[1].hold_flags);
+    assert_true(runs[2].hold_flags < runs[1].hold_flags);
+    assert_true(runs[1].drift_flags * runs[0].drift_after_first >
+                runs[0].drift_flags * runs[1].drift_after_first);
     assert_int_equal(runs[3].hold_flags, 0);
 }
 

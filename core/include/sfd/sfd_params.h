@@ -61,8 +61,8 @@ typedef struct {
                                     rest, so a clean feature is flagged with probability at most
                                     false_alarm_rate (a weighted Bonferroni split); (0, 1) */
     double alarm_hold_ratio;   /**< with the filter's translation: a track whose last
-                                    alarm_hold_frames observations the test flagged is tested
-                                    against this fraction of the window test's threshold (a
+                                    alarm_hold_frames observations the window test flagged is
+                                    tested against this fraction of the window test's threshold (a
                                     two-threshold, hysteresis rule: a moving point stays flagged
                                     through the frames its window alone would pass;
                                     core/docs/parity_space.md "Alarm hold"); 1: off; (0, 1] */
@@ -72,12 +72,13 @@ typedef struct {
                                           threshold is a step (a jump, a mismatch: the track
                                           then follows another point) and neither starts nor
                                           continues the hold; [1, 1e6] */
-    double alarm_hold_alpha_scale;   /**< with the hold on (alarm_hold_ratio < 1): the tests with
-                                          the filter's translation run at this fraction of their
-                                          share of false_alarm_rate, so that a clean track's held
-                                          repeats of a false alarm stay inside it (measured, not
-                                          derived: core/docs/parity_space.md "Alarm hold"); no
-                                          effect with the hold off; (0, 1] */
+    double alarm_hold_alpha_scale;   /**< with the hold on (alarm_hold_ratio < 1): the window test
+                                          with the filter's translation runs at this fraction of
+                                          its share of false_alarm_rate, so that a clean track's
+                                          held repeats of a false alarm stay inside it (measured,
+                                          not derived: core/docs/parity_space.md "Alarm hold");
+                                          the evidence test keeps alpha / 2; no effect with the
+                                          hold off; (0, 1] */
 } sfd_params_t;
 
 /** Longest run of flagged observations alarm_hold_frames may ask for (the detector counts a
@@ -87,7 +88,7 @@ typedef struct {
 /** @brief Fills @p p with the defaults: method PARITY, 1 px, alpha 0.01, L = 3, n = 3, unknown
  *         translation, exact covariance (22), isolation on, depth 10 m with variance 0, 100
  * hypotheses, confidence 0.99, zero gyro bias, 50 ms IMU gap, seed 1, no alarm hold (ratio 1,
- *         after 1 alarm, steps above 3 times the threshold, alpha scale 0.4 when on).
+ *         after 1 alarm, steps above 3 times the threshold, alpha scale 0.3 when on).
  *  @return SFD_OK; SFD_ERR_INVAL for null. */
 sfd_status_t sfd_params_default(sfd_params_t *p);
 

@@ -223,9 +223,10 @@ typedef struct {
     int16_t run;       /* consecutive frames observed, this one included (saturating) */
     int8_t segment;    /* observations since the track's last alarm, this one included
                           (saturating at SFD_MAX_WINDOW <= 127; the evidence test's window) */
-    int8_t alarm;      /* consecutive observations of the track the test with the filter's
-                          translation flagged below alarm_hold_max_statistic times the
-                          threshold, ending at this one (0: not flagged, or a step's alarm;
+    int8_t alarm;      /* consecutive observations of the track the window test with the
+                          filter's translation flagged (held alarms included) below
+                          alarm_hold_max_statistic times the threshold, ending at this one (0:
+                          not flagged, flagged by the evidence test, or a step's alarm;
                           saturating at SFD_ALARM_HOLD_MAX_FRAMES): the next one's alarm hold */
     int8_t valid;      /* 1 usable, 0 rejected input */
     int8_t prior; /* 1: depth_m, depth_var_m2 are the wire's prior; 0: the configured default */
@@ -250,9 +251,10 @@ typedef struct {
     sfd_camera_t camera;
     sfd_chi2_table_t chi2;
     sfd_chi2_table_t chi2_median; /* medians of chi2(k): the pixel noise scale's reference */
-    sfd_chi2_table_t chi2_window; /* the tests with the filter's translation: at alpha / 2
+    sfd_chi2_table_t chi2_window; /* the window test with the filter's translation: alpha / 2
                                      with the evidence test (alpha without), times
                                      alarm_hold_alpha_scale with the alarm hold on */
+    sfd_chi2_table_t chi2_half;   /* at alpha / 2: the evidence test */
     double noise_scale;           /* pixel noise variance factor (pixel_noise_adapt), 1 at init */
     float stat_scratch[SFD_MAX_FEATURES]; /* one frame's statistics for the scale (no content
                                              kept between frames) */
@@ -320,7 +322,8 @@ sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
  * every feature tracked through at least 2 of the L frames is tested alone, over min(its run,
  * L) frames, with sfd_window_test_track(): the
  * filter's poses and their covariance, the newest depth prior as a measurement, the threshold
- * chi2(dof, 1 - alpha), or alarm_hold_ratio times it for a track whose last alarm_hold_frames
+ * chi2(dof, 1 - alpha) (alpha / 2 with the evidence test, times alarm_hold_alpha_scale with the
+ * alarm hold on), or alarm_hold_ratio times it for a track whose last alarm_hold_frames
  * observations this test flagged (SFD_REASON_ALARM_HOLD when that flags it). Reason
  * SFD_REASON_FEATURE_TEST otherwise; a feature that cannot be triangulated is UNTESTED
  * (SFD_REASON_RANK). Otherwise (no filter, not started, a frame it did not clone, or
