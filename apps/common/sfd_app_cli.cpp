@@ -72,7 +72,8 @@ const KeyInfo kKeys[] = {
      Kind::kReal,
      SFD_DST(node.params.alarm_hold_max_statistic)},
     {{"alarm_hold_alpha_scale", "S",
-      "with the hold on, the filter tests' share of false_alarm_rate is scaled by S, (0, 1]"},
+      "with the hold on, the window test's share of false_alarm_rate is scaled by S (the "
+      "evidence test keeps alpha/2), (0, 1]"},
      Kind::kReal,
      SFD_DST(node.params.alarm_hold_alpha_scale)},
     {{"default_depth_m", "M", "depth prior of features without one (m), > 0"},

@@ -510,7 +510,8 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // the evidence test: a feature whose window passed and whose segment (its observations since
 // its last alarm) is longer than L is tested again over min(segment, evidence_frames) frames, a
 // window-limited GLR that sees a slow drift or a moving point the L-frame window absorbs. With
-// it each test runs at alpha / 2, so a clean feature is flagged with probability <= alpha.
+// it each test runs at alpha / 2 (the window test at alarm_hold_alpha_scale of that with the
+// hold on), so a clean feature is flagged with probability <= alpha.
 // False when the filter does not hold the window's frames (nothing written: the caller falls
 // back to the group test).
 // The alarm hold (parity_space.md "Alarm hold"): a track whose last alarm_hold_frames

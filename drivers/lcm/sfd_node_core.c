@@ -13,17 +13,14 @@ static int32_t clamp_i32(int64_t v) {
 
 void sfd_node_config_default(sfd_node_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
-    sfd_params_default(&cfg->params);
-    /* the node runs the window filter: parity takes the translation from it (Section III-A) */
-    cfg->params.translation_known = 1;
-    /* with it, the alarm hold, paid out of alpha by alarm_hold_alpha_scale (core/docs/
-     * parity_space.md "Alarm hold"; docs/evaluation.md: V1_02 semi-real parity F1 0.813 ->
-     * 0.864 at about the same clean-log false-alarm rate) */
-    cfg->params.alarm_hold_ratio = 0.25;
+    /* the pipeline's defaults: the window filter, parity with its translation, the alarm hold */
+    sfd_pipeline_config_t pc;
+    sfd_pipeline_config_default(&pc);
+    cfg->params = pc.params;
+    cfg->nav = pc.nav;
+    cfg->time = pc.time;
     cfg->camera_id = -1;
     cfg->publish_timing = 1;
-    sfd_nav_config_default(&cfg->nav);
-    sfd_time_guard_params_default(&cfg->time);
 }
 
 sfd_status_t sfd_node_init(sfd_node_t *node, const sfd_node_config_t *cfg,

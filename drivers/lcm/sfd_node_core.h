@@ -95,10 +95,9 @@ typedef struct {
     uint8_t out_buf[SFD_NODE_MAX_MESSAGE];
 } sfd_node_t;
 
-/** @brief Defaults: sfd_params_default() with the filter's translation (translation_known 1)
- *         and the alarm hold (alarm_hold_ratio 0.25), camera_id -1 (follow the first
- *         CAMERA_INFO), timing published, sfd_nav_config_default(),
- *         sfd_time_guard_params_default(). */
+/** @brief Defaults: sfd_pipeline_config_default()'s parameters, filter and time guard
+ *         (parity with the filter's translation and the alarm hold), camera_id -1 (follow the
+ *         first CAMERA_INFO), timing published. */
 void sfd_node_config_default(sfd_node_config_t *cfg);
 
 /**

@@ -372,9 +372,11 @@ void fz_config_from_byte(uint8_t b, sfd_node_config_t *cfg) {
     } else if ((b & 0xC0u) == 0xC0u) {
         cfg->params.translation_known = 1; /* parity with the filter's translation */
     }
-    if ((b & 0x84u) == 0x80u) { /* parity's alarm hold, after 1 or 2 alarms in a row */
-        cfg->params.alarm_hold_ratio = 0.5;
+    if ((b & 0x84u) == 0x80u) { /* parity's alarm hold: off, or after 1 or 2 alarms in a row
+                                   at the alpha scale 0.3 or unscaled (the default: 0.25, 0.3) */
+        cfg->params.alarm_hold_ratio = (b & 2u) ? 1.0 : 0.5;
         cfg->params.alarm_hold_frames = (b & 8u) ? 2 : 1;
+        cfg->params.alarm_hold_alpha_scale = (b & 1u) ? 1.0 : 0.3;
     }
     if (b & 8u) cfg->camera_id = 0;
     if (b & 16u) cfg->params.parity_isolation = 0;

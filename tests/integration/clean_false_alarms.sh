@@ -8,8 +8,10 @@
 #    configuration says 1 px: the pixel noise scale must find it), when ../shared/data is there.
 # The interval: the 99 % binomial interval of alpha over a third of the tests (consecutive
 # windows of one track share frames, so the tests are not independent). parity and both are
-# designed for at most alpha (parity's window and evidence tests each at alpha / 2; both's
-# parity stage at both_parity_share * alpha, its OPRF stage at the rest): their rate must be
+# designed for at most alpha (parity's window and evidence tests each at alpha / 2, the window
+# test with the shipped alarm hold at alarm_hold_alpha_scale of that, its held repeats paid out
+# of the rest; both's parity stage at both_parity_share * alpha, its OPRF stage at the rest):
+# their rate must be
 # below the interval's top. So must the association methods'
 # since their pixel noise is carried through the distortion Jacobian (issue 17 item 4; before,
 # at the stretched image border their rates reached 1.31 % (oprf), 1.61 % (ransac1) and 3.77 %

@@ -282,7 +282,9 @@ void accepted_configurations_start_a_node(void **) {
             c.node.params.alarm_hold_ratio = 1e-6;
             c.node.params.alarm_hold_frames = 1;
             c.node.params.alarm_hold_max_statistic = 1e6;
+            c.node.params.alarm_hold_alpha_scale = 1e-6;
         },
+        [](C &c) { c.node.params.alarm_hold_alpha_scale = 1.0; },
         [](C &c) { c.node.params.max_imu_gap_us = 1; },
         [](C &c) { c.node.params.seed = UINT64_MAX; },
         [](C &c) { c.node.time.horizon_us = 1; },

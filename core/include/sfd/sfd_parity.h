@@ -143,7 +143,8 @@ enum {
                                       observations since its last alarm (up to evidence_frames
                                       frames) failed: slow drift or a moving point */
     SFD_REASON_ALARM_HOLD = 11   /**< SPURIOUS: the track's last alarm_hold_frames
-                                      observations were flagged and its window test exceeds
+                                      observations were flagged by the window test (evidence
+                                      flags do not count) and its window test exceeds
                                       alarm_hold_ratio times the threshold but not the threshold
                                       (the statistic is relative to the lowered threshold, as a
                                       held CONSISTENT verdict's is: > 1 still means rejected) */
