@@ -58,7 +58,8 @@ GRID = {"alpha": ("--false-alarm-rate", "false_alarm_rate"),
         "hold": ("--alarm-hold-ratio", "alarm_hold_ratio"),
         "hold-frames": ("--alarm-hold-frames", "alarm_hold_frames"),
         "hold-max": ("--alarm-hold-max-statistic", "alarm_hold_max_statistic"),
-        "hold-alpha": ("--alarm-hold-alpha-scale", "alarm_hold_alpha_scale")}
+        "hold-alpha": ("--alarm-hold-alpha-scale", "alarm_hold_alpha_scale"),
+        "ramp": ("--evidence-ramp-share", "evidence_ramp_share")}
 PRESETS = {
     "quick": dict(scenarios=["mistracking", "moving-object"], seeds="1,2",
                   methods=",".join(METHODS), grid=["alpha=0.01,0.1"], frames=200),

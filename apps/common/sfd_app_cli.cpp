@@ -76,6 +76,11 @@ const KeyInfo kKeys[] = {
       "evidence test keeps alpha/2), (0, 1]"},
      Kind::kReal,
      SFD_DST(node.params.alarm_hold_alpha_scale)},
+    {{"evidence_ramp_share", "S",
+      "the ramp test's share of the evidence test's alpha/2 (the omnibus keeps the rest), [0, 1]; "
+      "0: off"},
+     Kind::kReal,
+     SFD_DST(node.params.evidence_ramp_share)},
     {{"default_depth_m", "M", "depth prior of features without one (m), > 0"},
      Kind::kReal,
      SFD_DST(node.params.default_depth_m)},

@@ -489,6 +489,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                                                 "alarm_hold_frames",
                                                 "alarm_hold_max_statistic",
                                                 "alarm_hold_alpha_scale",
+                                                "evidence_ramp_share",
                                                 "default_depth_m",
                                                 "default_depth_var_m2",
                                                 "max_imu_gap_us",
@@ -520,6 +521,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                 {"alarm_hold_ratio", &p.alarm_hold_ratio},
                 {"alarm_hold_max_statistic", &p.alarm_hold_max_statistic},
                 {"alarm_hold_alpha_scale", &p.alarm_hold_alpha_scale},
+                {"evidence_ramp_share", &p.evidence_ramp_share},
                 {"default_depth_m", &p.default_depth_m},
                 {"default_depth_var_m2", &p.default_depth_var_m2},
                 {"ransac_confidence", &p.ransac_confidence}};
@@ -760,6 +762,7 @@ bool validate(const AppConfig &cfg, std::string *error) {
     c.integer("alarm_hold_frames", p.alarm_hold_frames, 1, SFD_ALARM_HOLD_MAX_FRAMES);
     c.closed_interval("alarm_hold_max_statistic", p.alarm_hold_max_statistic, 1.0, 1e6);
     c.open_interval("alarm_hold_alpha_scale", p.alarm_hold_alpha_scale, 0.0, 1.0, true);
+    c.closed_interval("evidence_ramp_share", p.evidence_ramp_share, 0.0, 1.0);
     // stored as float by the parity detector (sfd_parity_obs_t)
     c.closed_interval("default_depth_m", p.default_depth_m, FLT_MIN, FLT_MAX);
     c.closed_interval("default_depth_var_m2", p.default_depth_var_m2, 0.0, FLT_MAX);

@@ -187,12 +187,17 @@ inline double median_in_place(float *v, int n) {
 
 /// sfd_msckf_track_statistic() (eq. (3) without forming N) of the unprojected track, gamma[1] and
 /// dof[1], and, when tail_first > 0, of its rows tail_first..t.rows - 1 alone (their blocks of S,
-/// H_f and r), gamma[0] and dof[0], from one factorization (msckf_update.cpp). SFD_ERR_INVAL for
-/// rows outside 4..SFD_MSCKF_TRACK_ROWS or a tail of fewer than 4 rows; SFD_ERR_NUMERIC as
-/// sfd_msckf_track_statistic(); nothing written on error. The caller has checked the pointers.
+/// H_f and r), gamma[0] and dof[0], from one factorization (msckf_update.cpp). With ramp_cols
+/// (rows x 2, the residual's signature of a 2-parameter fault, e.g. a ramp) and ramp_glr both
+/// given, *ramp_glr is the GLR of that fault over all rows, chi2(2) when there is none, from the
+/// same factorization, or -1 when it is not available (fewer than 6 rows, or the columns in the
+/// point's span). SFD_ERR_INVAL for rows outside 4..SFD_MSCKF_TRACK_ROWS or a tail of fewer than
+/// 4 rows; SFD_ERR_NUMERIC as sfd_msckf_track_statistic(); nothing written on error. The caller
+/// has checked the pointers.
 sfd_status_t msckf_statistic_tail(const sfd_msckf_track_t &t,
                                   const double (*S)[SFD_MSCKF_TRACK_ROWS], int tail_first,
-                                  double gamma[2], int32_t dof[2]);
+                                  double gamma[2], int32_t dof[2], const double (*ramp_cols)[2],
+                                  double *ramp_glr);
 
 /// Q (rows x 3, row stride 3): an orthonormal basis of the range of the track's H_f (Householder
 /// reflections), so that N N^T = I - Q Q^T for the null-space basis N of eq. (2). False when H_f

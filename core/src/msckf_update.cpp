@@ -209,12 +209,45 @@ bool statistic_of_prefix(const double (*G)[kRows], const double *w, int n, doubl
     return true;
 }
 
+/// The ramp's GLR over the n whitened rows: with the point's columns G (3) and the ramp's F (2),
+/// c = M^-1 [G F]^T w for [G F]^T [G F] = M M^T; |c|^2 is the part of |w|^2 that the point and
+/// the ramp together explain, its first three entries the point's alone (the Cholesky factor of
+/// the Gram matrix nests), so the ramp's GLR is c_3^2 + c_4^2 (core/docs/parity_space.md
+/// "Ramp"). False when the five columns are not independent above rounding (the ramp lies in
+/// the point's span: no motion) or the result is not finite.
+bool ramp_glr_of(const double (*G)[kRows], const double (*F)[kRows], const double *w, int n,
+                 double *glr) {
+    const double *col[5] = {G[0], G[1], G[2], F[0], F[1]};
+    double A[5][5];
+    double b[5];
+    for (int c = 0; c < 5; ++c) {
+        double v = 0.0;
+        for (int i = 0; i < n; ++i) v += col[c][i] * w[i];
+        b[c] = v;
+        for (int d = 0; d <= c; ++d) {
+            double x = 0.0;
+            for (int i = 0; i < n; ++i) x += col[c][i] * col[d][i];
+            A[c][d] = x;
+            A[d][c] = x;
+        }
+    }
+    double M[5][5];
+    if (!la::cholesky(A, la::Dim<5>{}, M, 1e-12)) return false;
+    double c5[5];
+    la::forward_solve(M, la::Dim<5>{}, b, c5);
+    const double g = c5[3] * c5[3] + c5[4] * c5[4];
+    if (!std::isfinite(g)) return false;
+    *glr = g;
+    return true;
+}
+
 }  // namespace
 }  // namespace sfd
 
 sfd_status_t sfd::msckf_statistic_tail(const sfd_msckf_track_t &t,
                                        const double (*S)[SFD_MSCKF_TRACK_ROWS], int tail_first,
-                                       double gamma[2], int32_t dof[2]) {
+                                       double gamma[2], int32_t dof[2],
+                                       const double (*ramp_cols)[2], double *ramp_glr) {
     const int rows = t.rows;
     const int tail = rows - tail_first;
     if (rows < 4 || rows > kRows || tail_first < 0 || (tail_first > 0 && tail < 4)) {
@@ -245,6 +278,16 @@ sfd_status_t sfd::msckf_statistic_tail(const sfd_msckf_track_t &t,
     if (!statistic_of_prefix(G, w, rows, &g_all)) return SFD_ERR_NUMERIC;
     double g_tail = 0.0;
     if (tail_first > 0 && !statistic_of_prefix(G, w, tail, &g_tail)) return SFD_ERR_NUMERIC;
+    if (ramp_cols != nullptr && ramp_glr != nullptr) {
+        // whitened like H_f's columns (rows reversed); rows - 5 >= 1 residual rows remain
+        double F[2][kRows];
+        for (int c = 0; c < 2; ++c) {
+            for (int i = 0; i < rows; ++i) F[c][i] = ramp_cols[rows - 1 - i][c];
+            la::forward_solve(L, rows, F[c], F[c]);
+        }
+        double g = 0.0;
+        *ramp_glr = (rows >= 6 && ramp_glr_of(G, F, w, rows, &g)) ? g : -1.0;
+    }
     gamma[0] = g_tail;
     dof[0] = (tail_first > 0) ? tail - 3 : 0;
     gamma[1] = g_all;
@@ -261,7 +304,7 @@ extern "C" sfd_status_t sfd_msckf_track_statistic(const sfd_msckf_track_t *t,
     }
     double g[2] = {0.0, 0.0};
     int32_t d[2] = {0, 0};
-    const sfd_status_t st = msckf_statistic_tail(*t, S, 0, g, d);
+    const sfd_status_t st = msckf_statistic_tail(*t, S, 0, g, d, nullptr, nullptr);
     if (st != SFD_OK) return st;
     *gamma = g[1];
     *dof = d[1];

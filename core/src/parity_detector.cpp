@@ -545,6 +545,8 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         ++m_max;
     }
     const bool evidence = want > L;
+    const bool ramp_on = evidence && det.ramp_threshold > 0.0;
+    const bool omnibus_on = !ramp_on || det.params.evidence_ramp_share < 1.0;
     const sfd_chi2_table_t &tab = det.chi2_window;  // the evidence test's is det.chi2_half
     sfd_parity_frame_t &nf = det.frames[det.head];
     // the previous frame (newest.prev indexes it; the window check above means L >= 2 frames)
@@ -568,12 +570,13 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         // when that fails (e.g. an old observation puts the point behind a camera), or there is
         // no evidence window, the L-frame test alone.
         const int m_ev = newest.segment < m_max ? newest.segment : m_max;
-        double gam[2] = {0.0, 0.0};
-        int32_t dofs[2] = {0, 0};
+        double gam[3] = {0.0, 0.0, 0.0};
+        int32_t dofs[3] = {0, 0, 0};
         sfd_status_t st = SFD_ERR_STATE;
         if (evidence && m_ev > L && m_short == L) {
             load_track(det, i, m_ev, scale, &obs);
-            st = sfd_window_test_track_nested(filter, &ext, &obs, L, scratch, gam, dofs);
+            st = ramp_on ? sfd_window_test_track_evidence(filter, &ext, &obs, L, scratch, gam, dofs)
+                         : sfd_window_test_track_nested(filter, &ext, &obs, L, scratch, gam, dofs);
         }
         const bool have_evidence = (st == SFD_OK);
         if (!have_evidence) {
@@ -610,12 +613,17 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, dofs[0], gam[0], thr);
         if (!have_evidence || dofs[1] < 1 || dofs[1] > SFD_PARITY_MAX_RESIDUAL) continue;
         thr = det.chi2_half.threshold[dofs[1]];
-        if (gam[1] > thr) {
+        if (omnibus_on && gam[1] > thr) {
             set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_EVIDENCE, dofs[1], gam[1], thr);
             v->fault_kind = SFD_FAULT_DRIFT;
             out->flags |= SFD_FLAG_PARITY_ALARM;
             // not a window alarm: the run stays 0 (as ingest set it), the next window test is
             // not held
+        } else if (ramp_on && dofs[2] == 2 && gam[2] > det.ramp_threshold) {
+            set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_EVIDENCE_RAMP, 2, gam[2],
+                        det.ramp_threshold);
+            v->fault_kind = SFD_FAULT_DRIFT;
+            out->flags |= SFD_FLAG_PARITY_ALARM;
         }
     }
     update_noise_scale(det, u, n_u);
@@ -654,8 +662,14 @@ extern "C" sfd_status_t sfd_parity_init(sfd_parity_t *det, const sfd_params_t *p
         (params->alarm_hold_ratio < 1.0 ? params->alarm_hold_alpha_scale : 1.0);
     const sfd_status_t tw = sfd_chi2_table_init(&det->chi2_window, alpha_window);
     if (tw != SFD_OK) return tw;
-    const sfd_status_t th = sfd_chi2_table_init(&det->chi2_half, 0.5 * params->false_alarm_rate);
+    // The ramp test takes evidence_ramp_share of the evidence test's alpha / 2 (a Bonferroni
+    // split; chi2(2) has the closed-form quantile -2 ln(alpha)); the omnibus keeps the rest.
+    const double ramp = evidence ? params->evidence_ramp_share : 0.0;
+    const double alpha_ev = 0.5 * params->false_alarm_rate;
+    const sfd_status_t th =
+        sfd_chi2_table_init(&det->chi2_half, ramp < 1.0 ? (1.0 - ramp) * alpha_ev : alpha_ev);
     if (th != SFD_OK) return th;
+    det->ramp_threshold = ramp > 0.0 ? -2.0 * std::log(ramp * alpha_ev) : 0.0;
     det->noise_scale = 1.0;
     det->params = *params;
     det->camera = cam;

@@ -1126,10 +1126,12 @@ namespace {
 
 /// sfd_window_test_track() over obs's m frames (gamma[1], dof[1]) and, when 2 <= inner < m, the
 /// statistic of the newest `inner` frames' rows in the same linearization (gamma[0], dof[0];
-/// sfd_window_test_track_nested()). Arguments checked by the callers, except obs's content.
+/// sfd_window_test_track_nested()); with ramp_glr, the ramp's GLR over the m frames
+/// (sfd_window_test_track_evidence(); -1 when not available). Arguments checked by the callers,
+/// except obs's content.
 sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
                         const sfd_window_test_obs_t *obs, sfd_window_scratch_t *scratch, int inner,
-                        double gamma[2], int32_t dof[2]) {
+                        double gamma[2], int32_t dof[2], double *ramp_glr) {
     const int m = obs->frames;
     if (m < 2 || m > SFD_MAX_WINDOW) return SFD_ERR_INVAL;
     if (!w->started || w->num_clones < m - 1) return SFD_ERR_STATE;
@@ -1237,7 +1239,23 @@ sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
     // The rows of the newest `inner` frames are the last ones (the depth row, when there is one,
     // is the newest frame's and comes last): both statistics from one factorization.
     const int tail_first = (inner >= 2 && inner < m) ? 2 * (m - inner) : 0;
-    return msckf_statistic_tail(tr, tr.R, tail_first, gamma, dof);
+    if (ramp_glr == nullptr)
+        return msckf_statistic_tail(tr, tr.R, tail_first, gamma, dof, nullptr, nullptr);
+    // The ramp (parity_space.md "Ramp"): frame k's pixel rows (oldest k = 0) shifted by k v in
+    // normalized coordinates, v unknown; the depth row carries none.
+    double ramp[SFD_MSCKF_TRACK_ROWS][2];
+    for (int k = 0; k < m; ++k) {
+        const std::size_t ru = 2U * static_cast<std::size_t>(k), rv = ru + 1U;
+        ramp[ru][0] = static_cast<double>(k);
+        ramp[ru][1] = 0.0;
+        ramp[rv][0] = 0.0;
+        ramp[rv][1] = static_cast<double>(k);
+    }
+    for (int i = 2 * m; i < rows; ++i) {
+        ramp[i][0] = 0.0;
+        ramp[i][1] = 0.0;
+    }
+    return msckf_statistic_tail(tr, tr.R, tail_first, gamma, dof, ramp, ramp_glr);
 }
 
 }  // namespace
@@ -1253,7 +1271,7 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
     }
     double g[2] = {0.0, 0.0};
     int32_t d[2] = {0, 0};
-    const sfd_status_t st = test_track(w, ext, obs, scratch, 0, g, d);
+    const sfd_status_t st = test_track(w, ext, obs, scratch, 0, g, d, nullptr);
     if (st != SFD_OK) return st;
     *gamma = g[1];
     *dof = d[1];
@@ -1271,11 +1289,34 @@ extern "C" sfd_status_t sfd_window_test_track_nested(sfd_window_t *w, const sfd_
     if (inner < 2 || inner >= obs->frames) return SFD_ERR_INVAL;
     double g[2] = {0.0, 0.0};
     int32_t d[2] = {0, 0};
-    const sfd_status_t st = test_track(w, ext, obs, scratch, inner, g, d);
+    const sfd_status_t st = test_track(w, ext, obs, scratch, inner, g, d, nullptr);
     if (st != SFD_OK) return st;
     gamma[0] = g[0];
     gamma[1] = g[1];
     dof[0] = d[0];
     dof[1] = d[1];
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_window_test_track_evidence(sfd_window_t *w, const sfd_extrinsics_t *ext,
+                                                       const sfd_window_test_obs_t *obs,
+                                                       int32_t inner, sfd_window_scratch_t *scratch,
+                                                       double gamma[3], int32_t dof[3]) {
+    if (w == nullptr || ext == nullptr || obs == nullptr || scratch == nullptr ||
+        gamma == nullptr || dof == nullptr) {
+        return SFD_ERR_INVAL;
+    }
+    if (inner < 2 || inner >= obs->frames) return SFD_ERR_INVAL;
+    double g[2] = {0.0, 0.0};
+    int32_t d[2] = {0, 0};
+    double ramp = -1.0;
+    const sfd_status_t st = test_track(w, ext, obs, scratch, inner, g, d, &ramp);
+    if (st != SFD_OK) return st;
+    gamma[0] = g[0];
+    gamma[1] = g[1];
+    gamma[2] = ramp >= 0.0 ? ramp : 0.0;
+    dof[0] = d[0];
+    dof[1] = d[1];
+    dof[2] = ramp >= 0.0 ? 2 : 0;
     return SFD_OK;
 }

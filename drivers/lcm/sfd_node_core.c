@@ -13,7 +13,8 @@ static int32_t clamp_i32(int64_t v) {
 
 void sfd_node_config_default(sfd_node_config_t *cfg) {
     memset(cfg, 0, sizeof *cfg);
-    /* the pipeline's defaults: the window filter, parity with its translation, the alarm hold */
+    /* the pipeline's defaults: the window filter, parity with its translation, the alarm hold,
+     * the ramp test */
     sfd_pipeline_config_t pc;
     sfd_pipeline_config_default(&pc);
     cfg->params = pc.params;

@@ -96,8 +96,8 @@ typedef struct {
 } sfd_node_t;
 
 /** @brief Defaults: sfd_pipeline_config_default()'s parameters, filter and time guard
- *         (parity with the filter's translation and the alarm hold), camera_id -1 (follow the
- *         first CAMERA_INFO), timing published. */
+ *         (parity with the filter's translation, the alarm hold and the ramp test), camera_id -1
+ * (follow the first CAMERA_INFO), timing published. */
 void sfd_node_config_default(sfd_node_config_t *cfg);
 
 /**

@@ -378,6 +378,10 @@ void fz_config_from_byte(uint8_t b, sfd_node_config_t *cfg) {
         cfg->params.alarm_hold_frames = (b & 8u) ? 2 : 1;
         cfg->params.alarm_hold_alpha_scale = (b & 1u) ? 1.0 : 0.3;
     }
+    if ((b & 0x84u) == 0x84u) { /* the ramp test alone (omnibus evidence test off) or no ramp
+                                   test (the default: 0.6 of the evidence test's alpha) */
+        cfg->params.evidence_ramp_share = (b & 2u) ? 1.0 : 0.0;
+    }
     if (b & 8u) cfg->camera_id = 0;
     if (b & 16u) cfg->params.parity_isolation = 0;
     if (b & 32u) cfg->params.exact_depth_covariance = 0;

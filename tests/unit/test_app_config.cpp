@@ -123,6 +123,10 @@ std::vector<BadValue> bad_values() {
          "alarm_hold_alpha_scale: 0 is not in (0, 1]"},
         {"alarm_hold_alpha_scale", [](C &c) { c.node.params.alarm_hold_alpha_scale = 1.5; },
          "alarm_hold_alpha_scale: 1.5 is not in (0, 1]"},
+        {"evidence_ramp_share", [](C &c) { c.node.params.evidence_ramp_share = -0.1; },
+         "evidence_ramp_share: -0.1 is not in [0, 1]"},
+        {"evidence_ramp_share", [](C &c) { c.node.params.evidence_ramp_share = 1.5; },
+         "evidence_ramp_share: 1.5 is not in [0, 1]"},
         {"filter.enabled", [](C &c) { c.node.nav.enabled = 7; }, "filter.enabled: 7 is not 0 or 1"},
         {"filter.gyro_noise_rad_s_rthz",
          [](C &c) { c.node.nav.noise.gyro_noise_rad_s_rthz = -1e-4; },
@@ -285,6 +289,15 @@ void accepted_configurations_start_a_node(void **) {
             c.node.params.alarm_hold_alpha_scale = 1e-6;
         },
         [](C &c) { c.node.params.alarm_hold_alpha_scale = 1.0; },
+        [](C &c) { c.node.params.evidence_ramp_share = 0.0; },
+        [](C &c) { c.node.params.evidence_ramp_share = 1.0; },
+        [](C &c) {  // the omnibus evidence test at the smallest share above 0
+            c.node.params.evidence_ramp_share = std::nextafter(1.0, 0.0);
+            c.node.params.false_alarm_rate = 1e-12;
+        },
+        [](C &c) {  // the ramp's alpha underflows: its threshold is infinite, it never flags
+            c.node.params.evidence_ramp_share = 4.9e-324;
+        },
         [](C &c) { c.node.params.max_imu_gap_us = 1; },
         [](C &c) { c.node.params.seed = UINT64_MAX; },
         [](C &c) { c.node.time.horizon_us = 1; },

@@ -75,6 +75,9 @@ static void params_out_of_range_rejected(void **state) {
     EXPECT_FIELD(alarm_hold_alpha_scale, 0.0, SFD_ERR_INVAL);
     EXPECT_FIELD(alarm_hold_alpha_scale, 1.0000001, SFD_ERR_INVAL);
     EXPECT_FIELD(alarm_hold_alpha_scale, NAN, SFD_ERR_INVAL);
+    EXPECT_FIELD(evidence_ramp_share, -1e-9, SFD_ERR_INVAL);
+    EXPECT_FIELD(evidence_ramp_share, 1.0000001, SFD_ERR_INVAL);
+    EXPECT_FIELD(evidence_ramp_share, NAN, SFD_ERR_INVAL);
 }
 
 /* GIVEN boundary values THEN they are accepted. */
@@ -93,6 +96,8 @@ static void params_boundaries_accepted(void **state) {
     EXPECT_FIELD(alarm_hold_max_statistic, 1.0, SFD_OK);
     EXPECT_FIELD(alarm_hold_alpha_scale, 1.0, SFD_OK);
     EXPECT_FIELD(alarm_hold_alpha_scale, 1e-6, SFD_OK);
+    EXPECT_FIELD(evidence_ramp_share, 0.0, SFD_OK);
+    EXPECT_FIELD(evidence_ramp_share, 1.0, SFD_OK);
 }
 
 int main(void) {

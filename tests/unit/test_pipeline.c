@@ -601,6 +601,7 @@ typedef struct {
     long tests, alarms;
     int delay[DRIFT_TRACKS]; /* 1 = flagged in the drift's first frame; -1 never (50 frames) */
     int evidence_flags;
+    int ramp_flags;         /* SFD_REASON_EVIDENCE_RAMP verdicts on the drifting tracks */
     int whole_track_marks;  /* verdicts passed to the window filter as whole-track flags */
     int mark_mismatches;    /* marks that are not exactly the evidence test's SPURIOUS verdicts */
     long drift_flags;       /* SPURIOUS verdicts on the drifting tracks after their first flag */
@@ -616,6 +617,7 @@ static double g_hold = -1.0;
 static int g_hold_frames = -1;
 static double g_hold_max = -1.0;   /* alarm_hold_max_statistic */
 static double g_hold_scale = -1.0; /* alarm_hold_alpha_scale */
+static double g_ramp = -1.0;       /* evidence_ramp_share */
 
 static void drift_run(double drift_px, drift_run_t *out) {
     sfd_pipeline_config_t cfg;
@@ -625,6 +627,7 @@ static void drift_run(double drift_px, drift_run_t *out) {
     if (g_hold_frames > 0) cfg.params.alarm_hold_frames = g_hold_frames;
     if (g_hold_max > 0.0) cfg.params.alarm_hold_max_statistic = g_hold_max;
     if (g_hold_scale > 0.0) cfg.params.alarm_hold_alpha_scale = g_hold_scale;
+    if (g_ramp >= 0.0) cfg.params.evidence_ramp_share = g_ramp;
     assert_int_equal(cfg.params.translation_known, 1);
     assert_int_equal(cfg.params.pixel_noise_adapt, 1);
     assert_int_equal(cfg.params.evidence_frames, SFD_MAX_WINDOW);
@@ -655,7 +658,9 @@ static void drift_run(double drift_px, drift_run_t *out) {
             /* an evidence flag deletes the track's earlier observations (drop 2), any other
              * flag ends the track before it (drop 1; core/docs/window_filter.md) */
             const sfd_feature_result_t *r = &v->features[i];
-            const int whole = r->status == SFD_VERDICT_SPURIOUS && r->reason == SFD_REASON_EVIDENCE;
+            const int whole =
+                r->status == SFD_VERDICT_SPURIOUS &&
+                (r->reason == SFD_REASON_EVIDENCE || r->reason == SFD_REASON_EVIDENCE_RAMP);
             out->whole_track_marks += g_p.feature_mark[i] != 0;
             out->mark_mismatches += (g_p.feature_mark[i] != 0) != whole;
         }
@@ -666,10 +671,12 @@ static void drift_run(double drift_px, drift_run_t *out) {
                 out->hold_flags++;
                 out->hold_unearned += flags_in_a_row[i] < cfg.params.alarm_hold_frames;
             }
-            /* the window test's flags (held ones included) in a row; an evidence flag is not
-             * one */
-            flags_in_a_row[i] =
-                (spurious && r->reason != SFD_REASON_EVIDENCE) ? flags_in_a_row[i] + 1 : 0;
+            /* the window test's flags (held ones included) in a row; an evidence or ramp flag is
+             * not one */
+            flags_in_a_row[i] = (spurious && r->reason != SFD_REASON_EVIDENCE &&
+                                 r->reason != SFD_REASON_EVIDENCE_RAMP)
+                                    ? flags_in_a_row[i] + 1
+                                    : 0;
             if (i == JUMP_TRACK || r->status == SFD_VERDICT_UNTESTED) continue;
             if (f >= 60 && !(i >= DRIFT_FIRST && i < DRIFT_FIRST + DRIFT_TRACKS)) {
                 out->clean_tested++;
@@ -686,6 +693,8 @@ static void drift_run(double drift_px, drift_run_t *out) {
                 }
                 out->evidence_flags +=
                     r->status == SFD_VERDICT_SPURIOUS && r->reason == SFD_REASON_EVIDENCE;
+                out->ramp_flags +=
+                    r->status == SFD_VERDICT_SPURIOUS && r->reason == SFD_REASON_EVIDENCE_RAMP;
                 continue;
             }
             /* scale settling; a held re-test after an alarm counts as a test (reason
@@ -739,6 +748,7 @@ static void parity_calibrates_its_pixel_noise_and_sees_a_drift(void **state) {
         if (rates[r] >= 1.0) assert_int_equal(within5, DRIFT_TRACKS);
         assert_int_equal(run.mark_mismatches, 0);
         if (run.evidence_flags > 0) assert_true(run.whole_track_marks >= run.evidence_flags);
+        assert_true(run.whole_track_marks >= run.evidence_flags + run.ramp_flags);
     }
 }
 
@@ -783,7 +793,10 @@ static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(v
         for (int dof = 1; dof <= 8; ++dof) {
             double q = 0.0, q_half = 0.0;
             assert_status(sfd_chi2_quantile_upper(alpha_window, dof, &q), SFD_OK);
-            assert_status(sfd_chi2_quantile_upper(0.5 * alpha, dof, &q_half), SFD_OK);
+            /* the omnibus evidence test keeps 1 - evidence_ramp_share of alpha / 2 */
+            const double ramp = g_p.parity.params.evidence_ramp_share;
+            assert_status(sfd_chi2_quantile_upper((1.0 - ramp) * 0.5 * alpha, dof, &q_half),
+                          SFD_OK);
             assert_near(g_p.parity.chi2_window.threshold[dof], q, 1e-9 * q);
             assert_near(g_p.parity.chi2_half.threshold[dof], q_half, 1e-9 * q_half);
         }
@@ -814,6 +827,61 @@ static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(v
     assert_int_equal(runs[3].hold_flags, 0);
 }
 
+/* GIVEN the hovering scene (0.5 px of pixel noise) with 20 tracks sliding 0.3 or 0.5 px per
+ * frame from frame 150 WHEN parity runs with the ramp test beside the evidence test
+ * (evidence_ramp_share 0.6, the pipeline's default) and without it (0) THEN the ramp test's
+ * threshold is chi2(2)'s quantile at 0.6 alpha / 2, -2 ln(0.6 alpha / 2), and the omnibus
+ * evidence test's at 0.4 alpha / 2; the ramp flags drifting tracks (SFD_REASON_EVIDENCE_RAMP,
+ * each one passed to the window filter as a whole-track flag like the evidence test's); over
+ * both rates at least as many drifting tracks are flagged within 10 frames as without it and
+ * more in all (when written: 0.3 px 7 -> 9, 0.5 px 10 -> 18 of 20), while clean features stay
+ * flagged at most at alpha (the 99 % binomial interval, a third of the tests independent). */
+static void ramp_test_flags_slow_drifts_sooner_and_keeps_clean_tracks_at_alpha(void **state) {
+    (void)state;
+    const double rates[2] = {0.3, 0.5};
+    const double alpha = 0.01;
+    int within10[2][2] = {{0, 0}, {0, 0}}; /* [off, on][rate] */
+    for (int on = 0; on < 2; ++on) {
+        for (int k = 0; k < 2; ++k) {
+            g_ramp = on ? -1.0 : 0.0; /* on: the pipeline's default */
+            drift_run_t run;
+            drift_run(rates[k], &run);
+            const double share = g_p.parity.params.evidence_ramp_share;
+            assert_true(on ? share == 0.6 : share == 0.0);
+            if (on) {
+                assert_near(g_p.parity.ramp_threshold, -2.0 * log(0.6 * 0.5 * alpha), 1e-12);
+                double q = 0.0;
+                assert_status(sfd_chi2_quantile_upper(0.4 * 0.5 * alpha, 5, &q), SFD_OK);
+                assert_near(g_p.parity.chi2_half.threshold[5], q, 1e-9 * q);
+            } else {
+                assert_true(g_p.parity.ramp_threshold == 0.0);
+            }
+            for (int d = 0; d < DRIFT_TRACKS; ++d)
+                within10[on][k] += run.delay[d] >= 1 && run.delay[d] <= 10;
+            const double rate = (double)run.clean_flagged / (double)run.clean_tested;
+            const double half =
+                2.576 * sqrt(alpha * (1.0 - alpha) / ((double)run.clean_tested / 3.0));
+            printf(
+                "  ramp %s, drift %.1f px/frame: flagged within 10 frames %d of %d (%d ramp "
+                "flags, %d evidence flags); clean features flagged %.4f of %ld (99%% interval "
+                "+-%.4f)\n",
+                on ? "on (0.6)" : "off", rates[k], within10[on][k], DRIFT_TRACKS, run.ramp_flags,
+                run.evidence_flags, rate, run.clean_tested, half);
+            assert_true(run.clean_tested > 4000);
+            assert_true(rate <= alpha + half);
+            assert_int_equal(run.mark_mismatches, 0);
+            if (on) {
+                assert_true(run.ramp_flags > 0);
+            } else {
+                assert_int_equal(run.ramp_flags, 0);
+            }
+        }
+    }
+    g_ramp = -1.0;
+    for (int k = 0; k < 2; ++k) assert_true(within10[1][k] >= within10[0][k]);
+    assert_true(within10[1][0] + within10[1][1] > within10[0][0] + within10[0][1]);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(pipeline_refuses_frames_before_calibration_and_out_of_order),
@@ -830,6 +898,7 @@ int main(void) {
         cmocka_unit_test(a_fast_imu_still_starts_the_filter_at_rest),
         cmocka_unit_test(parity_calibrates_its_pixel_noise_and_sees_a_drift),
         cmocka_unit_test(alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha),
+        cmocka_unit_test(ramp_test_flags_slow_drifts_sooner_and_keeps_clean_tracks_at_alpha),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -279,6 +279,11 @@ typedef struct {
      * sfd_window_test_track's over the 5 frames */
     long nested, nested_alarms, nested_disagree, nested_outer_differ;
     double nested_worst;
+    /* sfd_window_test_track_evidence over the same 5 frames: results that differ from the
+     * nested test's in gamma[0..1] or dof[0..1], ramp tests (dof[2] = 2) and their statistics
+     * above chi2(2, 0.99), and the sum of the ramp statistics */
+    long ev_differ, ramp_tests, ramp_alarms;
+    double ramp_sum;
 } track_test_t;
 static track_test_t g_tt;
 #define HIST 5
@@ -331,6 +336,23 @@ static void track_tests(const sfd_extrinsics_t *ext, int f, int64_t t0_us, int j
             const sfd_status_t sn = sfd_window_test_track_nested(&g_w, ext, &o5, 3, &g_ws, g2, d2);
             const sfd_status_t s5 = sfd_window_test_track(&g_w, ext, &o5, &g_ws, &g5, &d5);
             assert_status(sn, s5); /* one linearization: the same outcome */
+            double g3[3] = {0, 0, 0};
+            int32_t d3[3] = {0, 0, 0};
+            const sfd_status_t se =
+                sfd_window_test_track_evidence(&g_w, ext, &o5, 3, &g_ws, g3, d3);
+            assert_status(se, sn);
+            if (se == SFD_OK) {
+                g_tt.ev_differ +=
+                    !(g3[0] == g2[0] && g3[1] == g2[1] && d3[0] == d2[0] && d3[1] == d2[1]);
+                if (d3[2] == 2) {
+                    g_tt.ramp_tests++;
+                    g_tt.ramp_alarms += g3[2] > -2.0 * log(0.01); /* chi2(2) upper 1 % */
+                    g_tt.ramp_sum += g3[2];
+                } else {
+                    assert_int_equal(d3[2], 0);
+                    assert_true(g3[2] == 0.0);
+                }
+            }
             if (sn == SFD_OK) {
                 assert_int_equal(d2[0], 3);
                 assert_int_equal(d2[1], 7);
@@ -1059,6 +1081,19 @@ static void the_track_test_with_the_filters_covariance_is_calibrated(void **stat
     assert_true(fabs(nested_rate - alpha) <= nested_half);
     assert_true(g_tt.nested_disagree * 100 <= g_tt.nested); /* measured: 0 */
     assert_true(g_tt.nested_worst < 0.05);                  /* measured: 1.1e-2 */
+    /* the ramp test from the same factorization: chi2(2) on clean tracks */
+    const double ramp_rate = (double)g_tt.ramp_alarms / (double)g_tt.ramp_tests;
+    const double ramp_half = 2.576 * sqrt(alpha * (1.0 - alpha) / ((double)g_tt.ramp_tests / 3.0));
+    const double ramp_mean = g_tt.ramp_sum / (double)g_tt.ramp_tests;
+    printf(
+        "  ramp (sfd_window_test_track_evidence, 5 frames): %ld tests, alarm rate %.4f at "
+        "chi2(2, 0.99) (99%% interval +-%.4f), mean %.3f (chi2(2): 2); %ld results differ from the "
+        "nested test's\n",
+        g_tt.ramp_tests, ramp_rate, ramp_half, ramp_mean, g_tt.ev_differ);
+    assert_int_equal(g_tt.ev_differ, 0);
+    assert_true(g_tt.ramp_tests > 5000);
+    assert_true(fabs(ramp_rate - alpha) <= ramp_half);
+    assert_true(fabs(ramp_mean - 2.0) < 0.1);
     /* inner outside 2..m - 1: refused, nothing written */
     sfd_window_test_obs_t o;
     memset(&o, 0, sizeof o);
@@ -1068,6 +1103,15 @@ static void the_track_test_with_the_filters_covariance_is_calibrated(void **stat
     assert_status(sfd_window_test_track_nested(&g_w, &ext, &o, 3, &g_ws, g2, d2), SFD_ERR_INVAL);
     assert_status(sfd_window_test_track_nested(&g_w, &ext, &o, 1, &g_ws, g2, d2), SFD_ERR_INVAL);
     assert_status(sfd_window_test_track_nested(&g_w, &ext, &o, 2, NULL, g2, d2), SFD_ERR_INVAL);
+    {
+        double g3[3] = {-1.0, -1.0, -1.0};
+        int32_t d3[3] = {-1, -1, -1};
+        assert_status(sfd_window_test_track_evidence(&g_w, &ext, &o, 3, &g_ws, g3, d3),
+                      SFD_ERR_INVAL);
+        assert_status(sfd_window_test_track_evidence(&g_w, &ext, &o, 2, NULL, g3, d3),
+                      SFD_ERR_INVAL);
+        assert_true(g3[0] == -1.0 && g3[2] == -1.0 && d3[0] == -1 && d3[2] == -1);
+    }
     assert_true(g2[0] == -1.0 && g2[1] == -1.0 && d2[0] == -1 && d2[1] == -1);
 }
 

@@ -79,6 +79,12 @@ typedef struct {
                                           not derived: core/docs/parity_space.md "Alarm hold");
                                           the evidence test keeps alpha / 2; no effect with the
                                           hold off; (0, 1] */
+    double evidence_ramp_share;      /**< with the evidence test on: the share of its alpha / 2
+                                          that the ramp test over the same frames gets (the GLR
+                                          of a constant-rate slide, 2 dof;
+                                          sfd_window_test_track_evidence(), core/docs/
+                                          parity_space.md "Ramp"); the omnibus evidence test keeps
+                                          the rest (none at 1); 0: no ramp test; [0, 1] */
 } sfd_params_t;
 
 /** Longest run of flagged observations alarm_hold_frames may ask for (the detector counts a

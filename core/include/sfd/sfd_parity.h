@@ -134,20 +134,23 @@ enum {
     SFD_REASON_NO_GROUP = 3,  /**< UNTESTED: too few testable features for a group or reference */
     SFD_REASON_RANK = 4,      /**< UNTESTED: geometry leaves no residual (nu = 0) */
     SFD_REASON_NUMERIC = 5,   /**< UNTESTED: noise covariance not positive definite */
-    SFD_REASON_GROUP_FAILED = 6, /**< SPURIOUS: member of a failing group (paper's discard rule) */
-    SFD_REASON_ISOLATED = 7,     /**< decided by isolation inside / re-test outside its group */
-    SFD_REASON_INCONCLUSIVE = 8, /**< SPURIOUS: group failed, isolation could not clear it */
-    SFD_REASON_FEATURE_TEST = 9, /**< decided by the feature's own test with the translation
-                                      and Cov(z) from the window filter (every feature alone) */
-    SFD_REASON_EVIDENCE = 10,    /**< SPURIOUS: its window passed, but the test over its
-                                      observations since its last alarm (up to evidence_frames
-                                      frames) failed: slow drift or a moving point */
-    SFD_REASON_ALARM_HOLD = 11   /**< SPURIOUS: the track's last alarm_hold_frames
-                                      observations were flagged by the window test (evidence
-                                      flags do not count) and its window test exceeds
-                                      alarm_hold_ratio times the threshold but not the threshold
-                                      (the statistic is relative to the lowered threshold, as a
-                                      held CONSISTENT verdict's is: > 1 still means rejected) */
+    SFD_REASON_GROUP_FAILED = 6,  /**< SPURIOUS: member of a failing group (paper's discard rule) */
+    SFD_REASON_ISOLATED = 7,      /**< decided by isolation inside / re-test outside its group */
+    SFD_REASON_INCONCLUSIVE = 8,  /**< SPURIOUS: group failed, isolation could not clear it */
+    SFD_REASON_FEATURE_TEST = 9,  /**< decided by the feature's own test with the translation
+                                       and Cov(z) from the window filter (every feature alone) */
+    SFD_REASON_EVIDENCE = 10,     /**< SPURIOUS: its window passed, but the test over its
+                                       observations since its last alarm (up to evidence_frames
+                                       frames) failed: slow drift or a moving point */
+    SFD_REASON_ALARM_HOLD = 11,   /**< SPURIOUS: the track's last alarm_hold_frames
+                                       observations were flagged by the window test (evidence
+                                       flags do not count) and its window test exceeds
+                                       alarm_hold_ratio times the threshold but not the threshold
+                                       (the statistic is relative to the lowered threshold, as a
+                                       held CONSISTENT verdict's is: > 1 still means rejected) */
+    SFD_REASON_EVIDENCE_RAMP = 12 /**< SPURIOUS: its window passed, but the ramp test over the
+                                       evidence test's frames failed (a constant-rate slide
+                                       against the static point; evidence_ramp_share) */
 };
 
 /** Fault signature of a SPURIOUS feature (needs L >= 3 to tell them apart). */
@@ -255,7 +258,10 @@ typedef struct {
     sfd_chi2_table_t chi2_window; /* the window test with the filter's translation: alpha / 2
                                      with the evidence test (alpha without), times
                                      alarm_hold_alpha_scale with the alarm hold on */
-    sfd_chi2_table_t chi2_half;   /* at alpha / 2: the evidence test */
+    sfd_chi2_table_t chi2_half;   /* the omnibus evidence test: alpha / 2, times
+                                     1 - evidence_ramp_share */
+    double ramp_threshold;        /* the ramp test's chi2(2) threshold at evidence_ramp_share times
+                                     alpha / 2; 0 when it is off */
     double noise_scale;           /* pixel noise variance factor (pixel_noise_adapt), 1 at init */
     float stat_scratch[SFD_MAX_FEATURES]; /* one frame's statistics for the scale (no content
                                              kept between frames) */
@@ -327,9 +333,13 @@ sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
  * alarm hold on), or alarm_hold_ratio times it for a track whose last alarm_hold_frames
  * observations this test flagged (SFD_REASON_ALARM_HOLD when that flags it). Reason
  * SFD_REASON_FEATURE_TEST otherwise; a feature that cannot be triangulated is UNTESTED
- * (SFD_REASON_RANK). Otherwise (no filter, not started, a frame it did not clone, or
- * translation_known = 0) this is sfd_parity_push_frame(), and with translation_known the verdict
- * carries SFD_FLAG_TRANSLATION_UNKNOWN when the unknown-translation test judged the frame.
+ * (SFD_REASON_RANK). A feature whose window passed and whose segment is longer than L is tested
+ * again over it (evidence_frames): the omnibus evidence test (SFD_REASON_EVIDENCE) at
+ * (1 - evidence_ramp_share) alpha / 2 and the ramp test (SFD_REASON_EVIDENCE_RAMP,
+ * sfd_window_test_track_evidence()) at evidence_ramp_share alpha / 2. Otherwise (no filter, not
+ * started, a frame it did not clone, or translation_known = 0) this is sfd_parity_push_frame(), and
+ * with translation_known the verdict carries SFD_FLAG_TRANSLATION_UNKNOWN when the
+ * unknown-translation test judged the frame.
  *
  * @param filter may be NULL; @p scratch the filter's work space for the tests and @p ext the
  *        camera's pose in the IMU frame (both required with a filter).

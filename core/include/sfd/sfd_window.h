@@ -338,6 +338,25 @@ sfd_status_t sfd_window_test_track_nested(sfd_window_t *w, const sfd_extrinsics_
                                           sfd_window_scratch_t *scratch, double gamma[2],
                                           int32_t dof[2]);
 
+/**
+ * @brief sfd_window_test_track_nested() and, from the same factorization, the ramp test over
+ *        obs's m frames (parity_space.md "Ramp"): the GLR of a fault that shifts frame k's
+ *        observation (k = 0 the oldest) by k v in normalized image coordinates, v unknown (a
+ *        track sliding off its point at a constant rate since the window's first frame, or a
+ *        point moving across the image), against the static point. With the point's three
+ *        parameters and v's two fitted, the GLR is chi2(2) for a static, correctly tracked
+ *        feature, whatever m: a directed test that needs less evidence than the m-frame
+ *        omnibus test (dof 2 m + d - 3) when the fault is a ramp.
+ * @param gamma gamma[0], gamma[1] as sfd_window_test_track_nested(); gamma[2] the ramp's GLR.
+ * @param dof dof[0], dof[1] likewise; dof[2] = 2, or 0 (gamma[2] = 0) when the ramp cannot be
+ *        told from the point (fewer than 6 rows, or no motion that separates them).
+ * @return as sfd_window_test_track_nested().
+ */
+sfd_status_t sfd_window_test_track_evidence(sfd_window_t *w, const sfd_extrinsics_t *ext,
+                                            const sfd_window_test_obs_t *obs, int32_t inner,
+                                            sfd_window_scratch_t *scratch, double gamma[3],
+                                            int32_t dof[3]);
+
 /** @brief Position variance (m^2, x y z) of the IMU state. SFD_ERR_STATE when not started. */
 sfd_status_t sfd_window_position_var(sfd_window_t *w, double var_m2[3]);
 
