@@ -509,9 +509,11 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // L frames is tested alone with the filter's poses and covariance (sfd_window_test_track). Then
 // the evidence test: a feature whose window passed and whose segment (its observations since
 // its last alarm) is longer than L is tested again over min(segment, evidence_frames) frames, a
-// window-limited GLR that sees a slow drift or a moving point the L-frame window absorbs. With
-// it each test runs at alpha / 2 (the window test at alarm_hold_alpha_scale of that with the
-// hold on), so a clean feature is flagged with probability <= alpha.
+// window-limited GLR that sees a slow drift or a moving point the L-frame window absorbs, and
+// beside it the ramp test over the same frames (parity_space.md "Ramp"). With it each of the
+// window and the evidence test runs at alpha / 2 (the window test at alarm_hold_alpha_scale of
+// that with the hold on; the evidence test's alpha / 2 split with the ramp test by
+// evidence_ramp_share), so a clean feature is flagged with probability <= alpha.
 // False when the filter does not hold the window's frames (nothing written: the caller falls
 // back to the group test).
 // The alarm hold (parity_space.md "Alarm hold"): a track whose last alarm_hold_frames
@@ -521,8 +523,9 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // false alarms in a row. Consecutive windows share L - 1 frames, so a clean track's false alarm
 // is often repeated under the lower threshold: with the hold on, the window test runs at
 // alarm_hold_alpha_scale times its share of alpha (det.chi2_window), a factor measured on clean
-// logs (parity_space.md "Alarm hold"), not derived. The evidence test keeps alpha / 2 and its
-// alarms neither start nor continue the hold (its repeats would not be paid for).
+// logs (parity_space.md "Alarm hold"), not derived. The evidence test (with its ramp test) keeps
+// alpha / 2 and their alarms neither start nor continue the hold (their repeats would not be
+// paid for).
 __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t *filter,
                                                 sfd_window_scratch_t *scratch,
                                                 const sfd_extrinsics_t &ext, sfd_verdict_t *out) {

@@ -379,7 +379,7 @@ void fz_config_from_byte(uint8_t b, sfd_node_config_t *cfg) {
         cfg->params.alarm_hold_alpha_scale = (b & 1u) ? 1.0 : 0.3;
     }
     if ((b & 0x84u) == 0x84u) { /* the ramp test alone (omnibus evidence test off) or no ramp
-                                   test (the default: 0.6 of the evidence test's alpha) */
+                                   test; otherwise the default share, 0.6 */
         cfg->params.evidence_ramp_share = (b & 2u) ? 1.0 : 0.0;
     }
     if (b & 8u) cfg->camera_id = 0;

@@ -10,7 +10,7 @@
 # windows of one track share frames, so the tests are not independent). parity and both are
 # designed for at most alpha (parity's window and evidence tests each at alpha / 2, the window
 # test with the shipped alarm hold at alarm_hold_alpha_scale of that, its held repeats paid out
-# of the rest; both's parity stage at both_parity_share * alpha, its OPRF stage at the rest):
+# of the rest, the evidence test's split with its ramp test by evidence_ramp_share; both's parity stage at both_parity_share * alpha, its OPRF stage at the rest):
 # their rate must be
 # below the interval's top. So must the association methods'
 # since their pixel noise is carried through the distortion Jacobian (issue 17 item 4; before,

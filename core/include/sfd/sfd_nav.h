@@ -212,7 +212,8 @@ int32_t sfd_nav_build(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_frame_t
  *        through its distortion Jacobian is computed again from it).
  * @param status per feature, SFD_VERDICT_* (the frame's final verdicts).
  * @param whole_track per feature, nonzero when its SPURIOUS verdict condemns the track's earlier
- *        observations too (the parity evidence test): the window filter deletes them unused.
+ *        observations too (the parity evidence test or its ramp test): the window filter deletes
+ *        them unused.
  *        Any other SPURIOUS verdict ends the track before it (window_flagged_earlier). NULL: none
  *        does.
  */

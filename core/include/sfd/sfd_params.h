@@ -77,8 +77,8 @@ typedef struct {
                                           its share of false_alarm_rate, so that a clean track's
                                           held repeats of a false alarm stay inside it (measured,
                                           not derived: core/docs/parity_space.md "Alarm hold");
-                                          the evidence test keeps alpha / 2; no effect with the
-                                          hold off; (0, 1] */
+                                          the evidence test (with its ramp test) keeps alpha / 2;
+                                          no effect with the hold off; (0, 1] */
     double evidence_ramp_share;      /**< with the evidence test on: the share of its alpha / 2
                                           that the ramp test over the same frames gets (the GLR
                                           of a constant-rate slide, 2 dof;

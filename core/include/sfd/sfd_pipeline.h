@@ -256,9 +256,9 @@ sfd_status_t sfd_pipeline_associate(sfd_pipeline_t *p);
 
 /**
  * @brief Stage 3: the association's verdicts, the filter's update (the window filter's gated
- *        update: a flagged track ends before its flagged observation, or after an evidence flag
- *        is deleted whole; a gated one is dropped), landmarks and tracks kept for the next frame;
- *        the output is complete and the frame's slot freed.
+ *        update: a flagged track ends before its flagged observation, or after an evidence or
+ *        ramp flag is deleted whole; a gated one is dropped), landmarks and tracks kept for the
+ * next frame; the output is complete and the frame's slot freed.
  * @return SFD_OK; SFD_ERR_STATE unless stage 2 ran on the frame.
  */
 sfd_status_t sfd_pipeline_update(sfd_pipeline_t *p);
