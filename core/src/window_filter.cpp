@@ -1278,23 +1278,39 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
     return SFD_OK;
 }
 
+namespace sfd {
+namespace {
+
+/// test_track() over obs's frames with the newest `inner` of them as the inner test, after the
+/// argument checks of sfd_window_test_track_nested() and sfd_window_test_track_evidence()
+/// (outputs_given: their gamma and dof are not null).
+sfd_status_t test_track_inner(sfd_window_t *w, const sfd_extrinsics_t *ext,
+                              const sfd_window_test_obs_t *obs, int32_t inner,
+                              sfd_window_scratch_t *scratch, bool outputs_given, double g[2],
+                              int32_t d[2], double *ramp_glr) {
+    if (w == nullptr || ext == nullptr || obs == nullptr || scratch == nullptr || !outputs_given) {
+        return SFD_ERR_INVAL;
+    }
+    if (inner < 2 || inner >= obs->frames) return SFD_ERR_INVAL;
+    return test_track(w, ext, obs, scratch, inner, g, d, ramp_glr);
+}
+
+}  // namespace
+}  // namespace sfd
+
 extern "C" sfd_status_t sfd_window_test_track_nested(sfd_window_t *w, const sfd_extrinsics_t *ext,
                                                      const sfd_window_test_obs_t *obs,
                                                      int32_t inner, sfd_window_scratch_t *scratch,
                                                      double gamma[2], int32_t dof[2]) {
-    if (w == nullptr || ext == nullptr || obs == nullptr || scratch == nullptr ||
-        gamma == nullptr || dof == nullptr) {
-        return SFD_ERR_INVAL;
-    }
-    if (inner < 2 || inner >= obs->frames) return SFD_ERR_INVAL;
     double g[2] = {0.0, 0.0};
     int32_t d[2] = {0, 0};
-    const sfd_status_t st = test_track(w, ext, obs, scratch, inner, g, d, nullptr);
+    const sfd_status_t st = test_track_inner(w, ext, obs, inner, scratch,
+                                             gamma != nullptr && dof != nullptr, g, d, nullptr);
     if (st != SFD_OK) return st;
-    gamma[0] = g[0];
-    gamma[1] = g[1];
-    dof[0] = d[0];
-    dof[1] = d[1];
+    for (int k = 0; k < 2; ++k) {
+        gamma[k] = g[k];
+        dof[k] = d[k];
+    }
     return SFD_OK;
 }
 
@@ -1302,21 +1318,17 @@ extern "C" sfd_status_t sfd_window_test_track_evidence(sfd_window_t *w, const sf
                                                        const sfd_window_test_obs_t *obs,
                                                        int32_t inner, sfd_window_scratch_t *scratch,
                                                        double gamma[3], int32_t dof[3]) {
-    if (w == nullptr || ext == nullptr || obs == nullptr || scratch == nullptr ||
-        gamma == nullptr || dof == nullptr) {
-        return SFD_ERR_INVAL;
-    }
-    if (inner < 2 || inner >= obs->frames) return SFD_ERR_INVAL;
     double g[2] = {0.0, 0.0};
     int32_t d[2] = {0, 0};
     double ramp = -1.0;
-    const sfd_status_t st = test_track(w, ext, obs, scratch, inner, g, d, &ramp);
+    const sfd_status_t st = test_track_inner(w, ext, obs, inner, scratch,
+                                             gamma != nullptr && dof != nullptr, g, d, &ramp);
     if (st != SFD_OK) return st;
-    gamma[0] = g[0];
-    gamma[1] = g[1];
+    for (int k = 0; k < 2; ++k) {
+        gamma[k] = g[k];
+        dof[k] = d[k];
+    }
     gamma[2] = ramp >= 0.0 ? ramp : 0.0;
-    dof[0] = d[0];
-    dof[1] = d[1];
     dof[2] = ramp >= 0.0 ? 2 : 0;
     return SFD_OK;
 }
