@@ -58,6 +58,7 @@ GRID = {"alpha": ("--false-alarm-rate", "false_alarm_rate"),
         "hold": ("--alarm-hold-ratio", "alarm_hold_ratio"),
         "hold-frames": ("--alarm-hold-frames", "alarm_hold_frames"),
         "hold-max": ("--alarm-hold-max-statistic", "alarm_hold_max_statistic"),
+        "hold-min": ("--alarm-hold-min-statistic", "alarm_hold_min_statistic"),
         "hold-alpha": ("--alarm-hold-alpha-scale", "alarm_hold_alpha_scale"),
         "ramp": ("--evidence-ramp-share", "evidence_ramp_share")}
 PRESETS = {

@@ -71,6 +71,11 @@ const KeyInfo kKeys[] = {
       "an alarm above K times its threshold (a step) does not start the hold, [1, 1e6]"},
      Kind::kReal,
      SFD_DST(node.params.alarm_hold_max_statistic)},
+    {{"alarm_hold_min_statistic", "K",
+      "a held alarm below K times the full threshold ends the hold, [0, 1]; 0: every held "
+      "alarm continues it"},
+     Kind::kReal,
+     SFD_DST(node.params.alarm_hold_min_statistic)},
     {{"alarm_hold_alpha_scale", "S",
       "with the hold on, the window test's share of false_alarm_rate is scaled by S (the "
       "evidence test keeps alpha/2), (0, 1]"},

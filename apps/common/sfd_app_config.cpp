@@ -488,6 +488,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                                                 "alarm_hold_ratio",
                                                 "alarm_hold_frames",
                                                 "alarm_hold_max_statistic",
+                                                "alarm_hold_min_statistic",
                                                 "alarm_hold_alpha_scale",
                                                 "evidence_ramp_share",
                                                 "default_depth_m",
@@ -520,6 +521,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                 {"both_parity_share", &p.both_parity_share},
                 {"alarm_hold_ratio", &p.alarm_hold_ratio},
                 {"alarm_hold_max_statistic", &p.alarm_hold_max_statistic},
+                {"alarm_hold_min_statistic", &p.alarm_hold_min_statistic},
                 {"alarm_hold_alpha_scale", &p.alarm_hold_alpha_scale},
                 {"evidence_ramp_share", &p.evidence_ramp_share},
                 {"default_depth_m", &p.default_depth_m},
@@ -761,6 +763,7 @@ bool validate(const AppConfig &cfg, std::string *error) {
     c.open_interval("alarm_hold_ratio", p.alarm_hold_ratio, 0.0, 1.0, true);
     c.integer("alarm_hold_frames", p.alarm_hold_frames, 1, SFD_ALARM_HOLD_MAX_FRAMES);
     c.closed_interval("alarm_hold_max_statistic", p.alarm_hold_max_statistic, 1.0, 1e6);
+    c.closed_interval("alarm_hold_min_statistic", p.alarm_hold_min_statistic, 0.0, 1.0);
     c.open_interval("alarm_hold_alpha_scale", p.alarm_hold_alpha_scale, 0.0, 1.0, true);
     c.closed_interval("evidence_ramp_share", p.evidence_ramp_share, 0.0, 1.0);
     // stored as float by the parity detector (sfd_parity_obs_t)

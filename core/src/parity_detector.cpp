@@ -508,15 +508,14 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // parity_space.md "Known translation from the window filter"). Every feature tracked through the
 // L frames is tested alone with the filter's poses and covariance (sfd_window_test_track). Then
 // the evidence test: a feature whose window passed and whose segment (its observations since
-// its last alarm) is longer than L is tested again over min(segment, evidence_frames) frames, a
-// window-limited GLR that sees a slow drift or a moving point the L-frame window absorbs, and
-// beside it the ramp test over the same frames (parity_space.md "Ramp"). With it each of the
-// window and the evidence test runs at alpha / 2 (the window test at alarm_hold_alpha_scale of
-// that with the hold on; the evidence test's alpha / 2 split with the ramp test by
-// evidence_ramp_share), so a clean feature is flagged with probability <= alpha.
-// False when the filter does not hold the window's frames (nothing written: the caller falls
-// back to the group test).
-// The alarm hold (parity_space.md "Alarm hold"): a track whose last alarm_hold_frames
+// its last alarm at the full threshold) is longer than L is tested again over min(segment,
+// evidence_frames) frames, a window-limited GLR that sees a slow drift or a moving point the
+// L-frame window absorbs, and beside it the ramp test over the same frames (parity_space.md
+// "Ramp"). With it each of the window and the evidence test runs at alpha / 2 (the window test at
+// alarm_hold_alpha_scale of that with the hold on; the evidence test's alpha / 2 split with the
+// ramp test by evidence_ramp_share), so a clean feature is flagged with probability <= alpha. False
+// when the filter does not hold the window's frames (nothing written: the caller falls back to the
+// group test). The alarm hold (parity_space.md "Alarm hold"): a track whose last alarm_hold_frames
 // observations this test flagged is tested against alarm_hold_ratio times the window test's
 // threshold. A moving point is inconsistent over its whole life, while its 3-frame window alone
 // passes in a fraction of frames; a clean track pays the lower threshold only after that many
@@ -525,7 +524,9 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // alarm_hold_alpha_scale times its share of alpha (det.chi2_window), a factor measured on clean
 // logs (parity_space.md "Alarm hold"), not derived. The evidence test (with its ramp test) keeps
 // alpha / 2 and their alarms neither start nor continue the hold (their repeats would not be
-// paid for).
+// paid for). A held alarm continues the hold only above alarm_hold_min_statistic times the full
+// threshold, and does not start the track's segment again (the segment runs from the last alarm
+// at the full threshold).
 __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t *filter,
                                                 sfd_window_scratch_t *scratch,
                                                 const sfd_extrinsics_t &ext, sfd_verdict_t *out) {
@@ -557,6 +558,7 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
     const double hold = det.params.alarm_hold_ratio;
     const int hold_after = det.params.alarm_hold_frames;
     const double step_stat = det.params.alarm_hold_max_statistic;
+    const double hold_min = det.params.alarm_hold_min_statistic;
     const double scale = det.params.pixel_noise_adapt ? det.noise_scale : 1.0;
     float *u = det.stat_scratch;  // gamma over the median of chi2(dof), per tested feature
     int n_u = 0;
@@ -607,10 +609,18 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
                         by_hold ? thr : full);
             v->fault_kind = SFD_FAULT_UNKNOWN;
             out->flags |= SFD_FLAG_PARITY_ALARM;
-            newest.segment = 1;  // an alarm: the track's segment starts again here
-            // a step's alarm (far above the threshold) breaks the run of alarms: after a jump
-            // the track follows another point and its next windows are clean
-            newest.alarm = (gam[0] < step_stat * full) ? alarm_run : 0;
+            // An alarm at the full threshold starts the track's segment again; a held one does
+            // not, so the evidence test keeps a moving point's held stretch.
+            if (!by_hold) newest.segment = 1;
+            // A step's alarm (far above the threshold) breaks the run of alarms: after a jump the
+            // track follows another point and its next windows are clean. So does a held alarm
+            // below alarm_hold_min_statistic times the full threshold: after a drift the track
+            // follows another point too, and its clean windows exceed the lowered threshold with
+            // probability P(chi2(dof) > hold * full) (0.27-0.35 at 3-4 dof in the shipped
+            // configuration, 0.10-0.13 above 0.4 full), so held false alarms would chain.
+            const bool step = !(gam[0] < step_stat * full);
+            const bool weak = by_hold && gam[0] < hold_min * full;
+            newest.alarm = (step || weak) ? 0 : alarm_run;
             continue;
         }
         set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, dofs[0], gam[0], thr);

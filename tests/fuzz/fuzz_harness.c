@@ -377,6 +377,8 @@ void fz_config_from_byte(uint8_t b, sfd_node_config_t *cfg) {
         cfg->params.alarm_hold_ratio = (b & 2u) ? 1.0 : 0.5;
         cfg->params.alarm_hold_frames = (b & 8u) ? 2 : 1;
         cfg->params.alarm_hold_alpha_scale = (b & 1u) ? 1.0 : 0.3;
+        /* every held alarm continues the hold, or none does (the default: 0.4) */
+        cfg->params.alarm_hold_min_statistic = (b & 16u) ? 1.0 : 0.0;
     }
     if ((b & 0x84u) == 0x84u) { /* the ramp test alone (omnibus evidence test off) or no ramp
                                    test; otherwise the default share, 0.6 */

@@ -119,6 +119,10 @@ std::vector<BadValue> bad_values() {
          "alarm_hold_frames: 101 is not in 1..100"},
         {"alarm_hold_max_statistic", [](C &c) { c.node.params.alarm_hold_max_statistic = 0.5; },
          "alarm_hold_max_statistic: 0.5 is not in [1, 1e+06]"},
+        {"alarm_hold_min_statistic", [](C &c) { c.node.params.alarm_hold_min_statistic = -0.1; },
+         "alarm_hold_min_statistic: -0.1 is not in [0, 1]"},
+        {"alarm_hold_min_statistic", [](C &c) { c.node.params.alarm_hold_min_statistic = 1.5; },
+         "alarm_hold_min_statistic: 1.5 is not in [0, 1]"},
         {"alarm_hold_alpha_scale", [](C &c) { c.node.params.alarm_hold_alpha_scale = 0.0; },
          "alarm_hold_alpha_scale: 0 is not in (0, 1]"},
         {"alarm_hold_alpha_scale", [](C &c) { c.node.params.alarm_hold_alpha_scale = 1.5; },
@@ -289,6 +293,11 @@ void accepted_configurations_start_a_node(void **) {
             c.node.params.alarm_hold_alpha_scale = 1e-6;
         },
         [](C &c) { c.node.params.alarm_hold_alpha_scale = 1.0; },
+        [](C &c) { c.node.params.alarm_hold_min_statistic = 0.0; },
+        [](C &c) {  // every held alarm ends the hold (the hold lasts one observation)
+            c.node.params.alarm_hold_min_statistic = 1.0;
+            c.node.params.alarm_hold_ratio = 1e-6;
+        },
         [](C &c) { c.node.params.evidence_ramp_share = 0.0; },
         [](C &c) { c.node.params.evidence_ramp_share = 1.0; },
         [](C &c) {  // the omnibus evidence test at the smallest share above 0

@@ -85,6 +85,16 @@ typedef struct {
                                           sfd_window_test_track_evidence(), core/docs/
                                           parity_space.md "Ramp"); the omnibus evidence test keeps
                                           the rest (none at 1); 0: no ramp test; [0, 1] */
+    double alarm_hold_min_statistic; /**< with the hold on: an alarm the hold decided (its
+                                          statistic between alarm_hold_ratio and 1 times the
+                                          window test's threshold) continues the hold only when
+                                          its statistic is at least this many times that
+                                          threshold; a weaker one ends the run of alarms, so the
+                                          next observation is tested at the full threshold (a
+                                          track whose fault has ended, which the lowered
+                                          threshold would keep flagging, is released;
+                                          core/docs/parity_space.md "Alarm hold"). 0 (or at most
+                                          alarm_hold_ratio): every held alarm continues; [0, 1] */
 } sfd_params_t;
 
 /** Longest run of flagged observations alarm_hold_frames may ask for (the detector counts a

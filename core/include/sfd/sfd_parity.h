@@ -225,13 +225,15 @@ typedef struct {
     uint32_t cell_key; /* the spatial grouping's key: Z-order code of the raw pixel's 16-px cell */
     int16_t prev;      /* index of this track in the previous frame, -1 none */
     int16_t run;       /* consecutive frames observed, this one included (saturating) */
-    int8_t segment;    /* observations since the track's last alarm, this one included
-                          (saturating at SFD_MAX_WINDOW <= 127; the evidence test's window) */
+    int8_t segment;    /* observations since the track's last alarm at the full threshold (a
+                          held one does not count), this one included (saturating at
+                          SFD_MAX_WINDOW <= 127; the evidence test's window) */
     int8_t alarm;      /* consecutive observations of the track the window test with the
                           filter's translation flagged (held alarms included) below
                           alarm_hold_max_statistic times the threshold, ending at this one (0:
-                          not flagged, flagged by the evidence test, or a step's alarm;
-                          saturating at SFD_ALARM_HOLD_MAX_FRAMES): the next one's alarm hold */
+                          not flagged, flagged by the evidence test, a step's alarm, or a held
+                          alarm below alarm_hold_min_statistic times the threshold; saturating at
+                          SFD_ALARM_HOLD_MAX_FRAMES): the next one's alarm hold */
     int8_t valid;      /* 1 usable, 0 rejected input */
     int8_t prior; /* 1: depth_m, depth_var_m2 are the wire's prior; 0: the configured default */
 } sfd_parity_obs_t;
