@@ -524,9 +524,9 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // alarm_hold_alpha_scale times its share of alpha (det.chi2_window), a factor measured on clean
 // logs (parity_space.md "Alarm hold"), not derived. The evidence test (with its ramp test) keeps
 // alpha / 2 and their alarms neither start nor continue the hold (their repeats would not be
-// paid for). A held alarm continues the hold only above alarm_hold_min_statistic times the full
-// threshold, and does not start the track's segment again (the segment runs from the last alarm
-// at the full threshold).
+// paid for). A held alarm continues the hold only at or above alarm_hold_min_statistic times the
+// full threshold, and does not start the track's segment again (the segment runs from the last
+// alarm at the full threshold).
 __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t *filter,
                                                 sfd_window_scratch_t *scratch,
                                                 const sfd_extrinsics_t &ext, sfd_verdict_t *out) {
@@ -569,7 +569,8 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         // with the poses known, two frames already leave a residual.
         const int m_short = newest.run < L ? newest.run : L;
         if (!newest.valid || m_short < 2) continue;
-        // The evidence window: the segment since the last alarm, as far back as the clones reach.
+        // The evidence window: the segment since the last alarm at the full threshold, as far
+        // back as the clones reach.
         // When it is longer than L, both tests come from one linearization over it (the L-frame
         // test is the statistic of its newest L frames' rows; sfd_window_test_track_nested);
         // when that fails (e.g. an old observation puts the point behind a camera), or there is
@@ -616,8 +617,8 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
             // track follows another point and its next windows are clean. So does a held alarm
             // below alarm_hold_min_statistic times the full threshold: after a drift the track
             // follows another point too, and its clean windows exceed the lowered threshold with
-            // probability P(chi2(dof) > hold * full) (0.27-0.35 at 3-4 dof in the shipped
-            // configuration, 0.10-0.13 above 0.4 full), so held false alarms would chain.
+            // probability P(chi2(dof) > hold * full) (0.27-0.36 at 3-4 dof in the shipped
+            // configuration, 0.10-0.14 above 0.4 full), so held false alarms would chain.
             const bool step = !(gam[0] < step_stat * full);
             const bool weak = by_hold && gam[0] < hold_min * full;
             newest.alarm = (step || weak) ? 0 : alarm_run;

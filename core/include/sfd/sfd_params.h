@@ -51,11 +51,12 @@ typedef struct {
                                     frame's statistics, core/docs/parity_space.md "Pixel noise
                                     scale"); 0: pixel_sigma_px as given */
     int evidence_frames;       /**< with the filter's translation: a feature whose window passed
-                                    is tested again over its observations since its last alarm,
-                                    up to this many frames (a window-limited GLR over the track's
-                                    life, core/docs/parity_space.md "Evidence over a track's
-                                    life"); each test then at alpha / 2. 0 or <= window_frames:
-                                    off; at most SFD_MAX_WINDOW */
+                                    is tested again over its observations since its last alarm
+                                    at the full threshold, up to this many frames (a
+                                    window-limited GLR over the track's life,
+                                    core/docs/parity_space.md "Evidence over a track's life");
+                                    each test then at alpha / 2. 0 or <= window_frames: off; at
+                                    most SFD_MAX_WINDOW */
     double both_parity_share;  /**< method both: the share of false_alarm_rate its parity stage
                                     gets; OPRF, which then judges parity's survivors, gets the
                                     rest, so a clean feature is flagged with probability at most

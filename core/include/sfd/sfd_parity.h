@@ -140,11 +140,14 @@ enum {
     SFD_REASON_FEATURE_TEST = 9,  /**< decided by the feature's own test with the translation
                                        and Cov(z) from the window filter (every feature alone) */
     SFD_REASON_EVIDENCE = 10,     /**< SPURIOUS: its window passed, but the test over its
-                                       observations since its last alarm (up to evidence_frames
-                                       frames) failed: slow drift or a moving point */
+                                       observations since its last alarm at the full threshold
+                                       (up to evidence_frames frames) failed: slow drift or a
+                                       moving point */
     SFD_REASON_ALARM_HOLD = 11,   /**< SPURIOUS: the track's last alarm_hold_frames
                                        observations were flagged by the window test (evidence
-                                       flags do not count) and its window test exceeds
+                                       flags, steps above alarm_hold_max_statistic and held
+                                       flags below alarm_hold_min_statistic times the full
+                                       threshold do not count) and its window test exceeds
                                        alarm_hold_ratio times the threshold but not the threshold
                                        (the statistic is relative to the lowered threshold, as a
                                        held CONSISTENT verdict's is: > 1 still means rejected) */
@@ -232,8 +235,8 @@ typedef struct {
                           filter's translation flagged (held alarms included) below
                           alarm_hold_max_statistic times the threshold, ending at this one (0:
                           not flagged, flagged by the evidence test, a step's alarm, or a held
-                          alarm below alarm_hold_min_statistic times the threshold; saturating at
-                          SFD_ALARM_HOLD_MAX_FRAMES): the next one's alarm hold */
+                          alarm below alarm_hold_min_statistic times the full threshold;
+                          saturating at SFD_ALARM_HOLD_MAX_FRAMES): the next one's alarm hold */
     int8_t valid;      /* 1 usable, 0 rejected input */
     int8_t prior; /* 1: depth_m, depth_var_m2 are the wire's prior; 0: the configured default */
 } sfd_parity_obs_t;

@@ -143,8 +143,9 @@ typedef struct {
     int16_t dup_index[SFD_PIPELINE_DUP_SLOTS]; /**< track id -> feature, -1 empty (one frame) */
 } sfd_pipeline_t;
 
-/** @brief Defaults: sfd_params_default() with the filter's translation (translation_known 1)
- *         and the alarm hold (alarm_hold_ratio 0.25), sfd_nav_config_default(),
+/** @brief Defaults: sfd_params_default() with the filter's translation (translation_known 1),
+ *         the alarm hold (alarm_hold_ratio 0.25) and its release (alarm_hold_min_statistic
+ *         0.4), and the ramp test (evidence_ramp_share 0.6); sfd_nav_config_default(),
  *         sfd_time_guard_params_default(). */
 void sfd_pipeline_config_default(sfd_pipeline_config_t *cfg);
 
