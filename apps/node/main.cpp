@@ -98,6 +98,22 @@ void on_message(const lcm_recv_buf_t *rbuf, const char *, void *user) {
     ++g_app.messages;
 }
 
+// Subscription queue lengths (messages waiting for lcm_handle). IMU: 5 s at 200 Hz, about
+// 100 KiB of liblcm's 1000 KiB receive ring. Frames: liblcm's default of 30; a FEATURES message
+// is about 20 KiB whatever its count (fixed arrays of 512), so 30 already take 600 KiB.
+constexpr int kImuQueueMessages = 1000;
+constexpr int kFrameQueueMessages = 30;
+
+bool subscribe(lcm_t *lcm, const std::string &channel, sfd_node_input_t *kind, int queue) {
+    lcm_subscription_t *sub = lcm_subscribe(lcm, channel.c_str(), on_message, kind);
+    if (sub == nullptr || lcm_subscription_set_queue_capacity(sub, queue) != 0) {
+        std::fprintf(stderr, "sfd-node: cannot subscribe to %s (queue of %d messages)\n",
+                     channel.c_str(), queue);
+        return false;
+    }
+    return true;
+}
+
 // Real-time set-up requested on the command line (all off by default).
 struct Realtime {
     int fifo_priority = 0;  // 0: keep the default scheduler
@@ -216,13 +232,24 @@ int main(int argc, char **argv) {
                      cfg.lcm_url.c_str());
         return 2;
     }
-    lcm_subscribe(g_app.lcm, cfg.channels.imu.c_str(), on_message, &g_kinds[0]);
-    lcm_subscribe(g_app.lcm, cfg.channels.camera_info.c_str(), on_message, &g_kinds[1]);
-    lcm_subscribe(g_app.lcm, cfg.channels.features.c_str(), on_message, &g_kinds[2]);
-    if (cfg.node.nav.init_from_truth) {
+    // liblcm keeps at most 30 messages per subscription waiting for lcm_handle and drops the
+    // rest silently. One slow frame (filter start-up, a loaded or sanitized build) then cost 30+
+    // IMU samples of a log played at twice its 200 Hz, the filter rejected the frames after the
+    // hole (imu_gap) and the verdicts differed from sfd-replay's on the same log (CI of 2026-11-28,
+    // ASan build). The IMU queue is longer (kImuQueueMessages); a hole that liblcm still makes
+    // is integrated over, or is imu_gap beyond max_imu_gap_us (docs/deploy.md).
+    bool subscribed =
+        subscribe(g_app.lcm, cfg.channels.imu, &g_kinds[0], kImuQueueMessages) &&
+        subscribe(g_app.lcm, cfg.channels.camera_info, &g_kinds[1], kFrameQueueMessages) &&
+        subscribe(g_app.lcm, cfg.channels.features, &g_kinds[2], kFrameQueueMessages);
+    if (subscribed && cfg.node.nav.init_from_truth) {
         // Evaluation only: the filter starts from the first TRUTH poses (sfd-hil --sim publishes
         // them), as in sfd-replay.
-        lcm_subscribe(g_app.lcm, cfg.channels.truth.c_str(), on_message, &g_kinds[3]);
+        subscribed = subscribe(g_app.lcm, cfg.channels.truth, &g_kinds[3], kFrameQueueMessages);
+    }
+    if (!subscribed) {
+        lcm_destroy(g_app.lcm);
+        return 1;
     }
     if (!lock_memory(rt)) {
         lcm_destroy(g_app.lcm);

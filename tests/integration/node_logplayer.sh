@@ -46,14 +46,31 @@ else
   "$SFD_BUILD/apps/sfd-node" --lcm-url "$url" > "$SFD_TMP/node.txt" 2>&1 &
 fi
 node=$!
-sleep 1
+# Play only once the node has subscribed (it prints its start line after lcm_subscribe), and stop
+# it only once the logger has recorded a verdict for every frame: a fixed sleep lost the first
+# messages, or the last frames still queued, whenever a sanitized build on a loaded machine was
+# slow (up to 30 s each).
+for _ in $(seq 300); do
+  grep -q "^sfd-node .*: method" "$SFD_TMP/node.txt" 2>/dev/null && break
+  sleep 0.1
+done
+grep -q "^sfd-node .*: method" "$SFD_TMP/node.txt" || { cat "$SFD_TMP/node.txt"; echo "sfd-node did not start within 30 s"; exit 1; }
+sleep 0.5  # the logger subscribes within this (it prints nothing with -q)
 "$SFD_LCM_LOGPLAYER" --lcm-url="$url" -s 2.0 "$SFD_TMP/in.lcmlog" >/dev/null
-sleep 1
+for _ in $(seq 300); do
+  [ "$(grep -a -o SFD_VERDICT "$SFD_TMP/recorded.lcmlog" | wc -l)" -ge 60 ] && break
+  sleep 0.1
+done
+sleep 0.3  # SFD_STATE and SFD_TIMING of the last frame, and one logger flush (100 ms)
 kill -INT "$node"
 rc=0; wait "$node" || rc=$?
 kill -INT "$logger"; wait "$logger" || true
 cat "$SFD_TMP/node.txt"
 [ "$rc" -eq 0 ] || { echo "sfd-node exited $rc on SIGINT"; exit 1; }
+# Every message played reached the node (sfd-sim wrote 591 IMU samples and 60 frames); a loss
+# on the bus would make the verdicts differ from sfd-replay's for a reason that is not sfd's.
+grep -q "stopped: 60 frames in, .* 591 IMU," "$SFD_TMP/node.txt" || {
+  echo "sfd-node did not receive all 60 frames and 591 IMU samples played (lost on the bus)"; exit 1; }
 if [ -n "$SFD_PRELOAD" ]; then
   grep -q "heap calls after start-up: sfd per-frame path 0;" "$SFD_TMP/node.txt" || {
     echo "sfd-node's per-frame path allocated (see the heap line above)"; exit 1; }
