@@ -396,7 +396,9 @@ bool read_config(const std::string &path, AppConfig *cfg, std::string *error) {
     return false;
 }
 
-// The configuration is the small subset of YAML that apps/config/sfd.yaml uses. Every line is
+// The configuration is the small subset of YAML that apps/config/sfd.yaml uses. The first line
+// is "%YAML:1.0" (without it cv::FileStorage refuses the file as "Input file is invalid", which
+// names neither the line nor the cause). Every line is
 // blank, a comment, the "%YAML:1.0" / "---" header, or "KEY:" / "KEY: VALUE" (KEY a name of
 // letters, digits and '_', any indentation; lists are written [a, b, c]), in printable ASCII
 // (tabs and, in comments, UTF-8 allowed). Anything else is refused here, before cv::FileStorage
@@ -420,6 +422,11 @@ static bool config_lines_ok(const std::string &path, std::string *error) {
             const unsigned char c = static_cast<unsigned char>(line[k]);
             if (c == '\t' || (c >= 0x20 && c < 0x7f) || (comment && k > i && c >= 0x80)) continue;
             return bad("a control character or a non-ASCII byte outside a comment");
+        }
+        if (n == 1 && line != "%YAML:1.0" && line != "%YAML 1.0") {
+            return bad(
+                "the first line must be %YAML:1.0 (cv::FileStorage, which reads the "
+                "configuration, takes no file without it)");
         }
         if (comment) continue;
         if (n <= 2 && (line == "%YAML:1.0" || line == "%YAML 1.0" || line == "---")) continue;

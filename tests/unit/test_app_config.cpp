@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <string>
@@ -545,6 +546,22 @@ void file_values_are_named(void **) {
     expect_equal(file_error("seed: 1\x01"),
                  "F:3: a control character or a non-ASCII byte outside a comment", "control byte");
     expect_equal(file_error("# \xc3\xa9t\xc3\xa9\nseed: 1"), "", "UTF-8 in a comment");
+    // plain YAML without the %YAML:1.0 line (cv::FileStorage: "Input file is invalid"), and a
+    // comment above it (the same)
+    const std::string header =
+        "F:1: the first line must be %YAML:1.0 (cv::FileStorage, which reads the configuration, "
+        "takes no file without it)";
+    for (const char *text : {"seed: 1\n", "---\nseed: 1\n", "# c\n%YAML:1.0\nseed: 1\n"}) {
+        char plain[] = "/tmp/sfd_test_app_config_XXXXXX";
+        const int pfd = mkstemp(plain);
+        assert_true(pfd >= 0);
+        const size_t len = std::strlen(text);
+        assert_int_equal(write(pfd, text, len), static_cast<ssize_t>(len));
+        close(pfd);
+        assert_false(sfdapp::read_config(plain, &c2, &err));
+        expect_equal(err, std::string(plain) + header.substr(1), text);
+        std::remove(plain);
+    }
     // a YAML escape that makes a line break in a value, or in a key, stays one line in the
     // message (found by fuzz.config)
     const std::string nl = file_error("channels:\n   imu: \"a\\nb\"");
