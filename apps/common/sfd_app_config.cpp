@@ -415,6 +415,11 @@ static bool config_lines_ok(const std::string &path, std::string *error) {
             *error = path + ":" + std::to_string(n) + ": " + why;
             return false;
         };
+        if (n == 1 && line != "%YAML:1.0" && line != "%YAML 1.0") {
+            return bad(
+                "the first line must be %YAML:1.0 (cv::FileStorage, which reads the "
+                "configuration, takes no file without it)");
+        }
         size_t i = line.find_first_not_of(" \t");
         if (i == std::string::npos) continue;  // blank
         const bool comment = line[i] == '#';
@@ -422,11 +427,6 @@ static bool config_lines_ok(const std::string &path, std::string *error) {
             const unsigned char c = static_cast<unsigned char>(line[k]);
             if (c == '\t' || (c >= 0x20 && c < 0x7f) || (comment && k > i && c >= 0x80)) continue;
             return bad("a control character or a non-ASCII byte outside a comment");
-        }
-        if (n == 1 && line != "%YAML:1.0" && line != "%YAML 1.0") {
-            return bad(
-                "the first line must be %YAML:1.0 (cv::FileStorage, which reads the "
-                "configuration, takes no file without it)");
         }
         if (comment) continue;
         if (n <= 2 && (line == "%YAML:1.0" || line == "%YAML 1.0" || line == "---")) continue;

@@ -99,8 +99,9 @@ void on_message(const lcm_recv_buf_t *rbuf, const char *, void *user) {
 }
 
 // Subscription queue lengths (messages waiting for lcm_handle). IMU: 5 s at 200 Hz, about
-// 100 KiB of liblcm's 1000 KiB receive ring. Frames: liblcm's default of 30; a FEATURES message
-// is about 20 KiB whatever its count (fixed arrays of 512), so 30 already take 600 KiB.
+// 100 KiB. Frames: liblcm's default of 30; a FEATURES message is about 20 KiB whatever its count
+// (fixed arrays of 512), so 30 take 600 KiB. liblcm 1.3's receive ring starts at 200 KiB and
+// grows by half on demand (on the heap, in its receive thread, not in sfd's frame path).
 constexpr int kImuQueueMessages = 1000;
 constexpr int kFrameQueueMessages = 30;
 

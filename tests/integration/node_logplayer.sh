@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: MIT
 # integration.node_logplayer: Debian's lcm-logplayer plays an sfd-sim log over UDP multicast
 # (ttl=0) into a running sfd-node while Debian's lcm-logger records the bus. Then:
-#  - the node stops cleanly on SIGINT (exit 0);
+#  - the node stops cleanly on SIGINT (exit 0), having received every IMU sample and frame played;
 #  - the recording holds one SFD_VERDICT and one SFD_TIMING per FEATURES frame;
 #  - a log recorded by lcm-logger replays in sfd-replay, and sfd's log reader reads it exactly as
 #    liblcm's reader does;
@@ -32,7 +32,19 @@ trap 'rm -rf "$tmp"' EXIT
 "$build/apps/sfd-sim" mistracking -o "$tmp/in.lcmlog" --frames 60 --seed 3 >/dev/null
 "$build/apps/sfd-replay" "$tmp/in.lcmlog" -o "$tmp/replay.lcmlog" >/dev/null
 
-export SFD_BUILD="$build" SFD_TMP="$tmp" SFD_PRELOAD="$preload"
+# What the node must receive: every IMU sample and frame of the log played.
+read -r n_imu n_frames < <(PYTHONPATH="$pytypes" "$py" - "$tmp/in.lcmlog" <<'PYEOF'
+import sys, lcm
+n = {'IMU': 0, 'FEATURES': 0}
+for ev in lcm.EventLog(sys.argv[1], 'r'):
+    if ev.channel in n:
+        n[ev.channel] += 1
+print(n['IMU'], n['FEATURES'])
+PYEOF
+)
+[ "$n_frames" -gt 0 ] && [ "$n_imu" -gt 0 ] || { echo "node_logplayer: no IMU or FEATURES in the log"; exit 1; }
+
+export SFD_BUILD="$build" SFD_TMP="$tmp" SFD_PRELOAD="$preload" SFD_N_IMU="$n_imu" SFD_N_FRAMES="$n_frames"
 unshare -n bash -euo pipefail <<'NS'
 ip link set lo up
 ip link set lo multicast on
@@ -46,38 +58,50 @@ else
   "$SFD_BUILD/apps/sfd-node" --lcm-url "$url" > "$SFD_TMP/node.txt" 2>&1 &
 fi
 node=$!
+# No process outlives an early exit (the logger holds ctest's output pipe open).
+trap 'kill "$node" "$logger" 2>/dev/null || true' EXIT
 # Play only once the node has subscribed (it prints its start line after lcm_subscribe), and stop
 # it only once the logger has recorded a verdict for every frame: a fixed sleep lost the first
 # messages, or the last frames still queued, whenever a sanitized build on a loaded machine was
 # slow (up to 30 s each).
 for _ in $(seq 300); do
   grep -q "^sfd-node .*: method" "$SFD_TMP/node.txt" 2>/dev/null && break
+  kill -0 "$node" 2>/dev/null || break
   sleep 0.1
 done
-grep -q "^sfd-node .*: method" "$SFD_TMP/node.txt" || { cat "$SFD_TMP/node.txt"; echo "sfd-node did not start within 30 s"; exit 1; }
+grep -q "^sfd-node .*: method" "$SFD_TMP/node.txt" || {
+  cat "$SFD_TMP/node.txt"; echo "sfd-node did not start (it exited, or no start line in 30 s)"; exit 1; }
 sleep 0.5  # the logger subscribes within this (it prints nothing with -q)
 "$SFD_LCM_LOGPLAYER" --lcm-url="$url" -s 2.0 "$SFD_TMP/in.lcmlog" >/dev/null
+verdicts=0
 for _ in $(seq 300); do
-  [ "$(grep -a -o SFD_VERDICT "$SFD_TMP/recorded.lcmlog" | wc -l)" -ge 60 ] && break
+  verdicts="$(grep -a -o SFD_VERDICT "$SFD_TMP/recorded.lcmlog" | wc -l)"
+  [ "$verdicts" -ge "$SFD_N_FRAMES" ] && break
   sleep 0.1
 done
+[ "$verdicts" -ge "$SFD_N_FRAMES" ] || {
+  cat "$SFD_TMP/node.txt"
+  echo "lcm-logger recorded $verdicts verdicts of $SFD_N_FRAMES frames in 30 s"; exit 1; }
 sleep 0.3  # SFD_STATE and SFD_TIMING of the last frame, and one logger flush (100 ms)
 kill -INT "$node"
 rc=0; wait "$node" || rc=$?
 kill -INT "$logger"; wait "$logger" || true
 cat "$SFD_TMP/node.txt"
 [ "$rc" -eq 0 ] || { echo "sfd-node exited $rc on SIGINT"; exit 1; }
-# Every message played reached the node (sfd-sim wrote 591 IMU samples and 60 frames); a loss
-# on the bus would make the verdicts differ from sfd-replay's for a reason that is not sfd's.
-grep -q "stopped: 60 frames in, .* 591 IMU," "$SFD_TMP/node.txt" || {
-  echo "sfd-node did not receive all 60 frames and 591 IMU samples played (lost on the bus)"; exit 1; }
+# Every message played reached the node; a loss on the bus or in liblcm's receive queues would
+# make the verdicts differ from sfd-replay's for a reason that is not sfd's.
+grep -q "stopped: $SFD_N_FRAMES frames in, .* $SFD_N_IMU IMU," "$SFD_TMP/node.txt" || {
+  echo "sfd-node did not receive the $SFD_N_FRAMES frames and $SFD_N_IMU IMU samples played" \
+       "(lost on the bus or in liblcm's receive queues)"
+  exit 1
+}
 if [ -n "$SFD_PRELOAD" ]; then
   grep -q "heap calls after start-up: sfd per-frame path 0;" "$SFD_TMP/node.txt" || {
     echo "sfd-node's per-frame path allocated (see the heap line above)"; exit 1; }
 fi
 NS
 
-PYTHONPATH="$pytypes" "$py" - "$tmp/recorded.lcmlog" "$tmp/replay.lcmlog" <<'PYEOF'
+PYTHONPATH="$pytypes" "$py" - "$tmp/recorded.lcmlog" "$tmp/replay.lcmlog" "$n_frames" <<'PYEOF'
 import collections, sys
 import lcm
 from sfd import feature_verdict_t
@@ -94,14 +118,15 @@ def read(path):
 rec_counts, rec = read(sys.argv[1])
 rep_counts, rep = read(sys.argv[2])
 print('recorded by lcm-logger:', dict(rec_counts))
-assert rec_counts['FEATURES'] == rep_counts['FEATURES'] == 60, (rec_counts, rep_counts)
-assert rec_counts['SFD_VERDICT'] == 60 and rec_counts['SFD_TIMING'] == 60, rec_counts
+frames = int(sys.argv[3])
+assert rec_counts['FEATURES'] == rep_counts['FEATURES'] == frames, (rec_counts, rep_counts)
+assert rec_counts['SFD_VERDICT'] == frames and rec_counts['SFD_TIMING'] == frames, rec_counts
 assert rec.keys() == rep.keys()
 spurious = 0
 for utime in rep:
     assert rec[utime] == rep[utime], utime
     spurious += sum(1 for s in rep[utime][1] if s == 2)
-print('node verdicts identical to sfd-replay for all 60 frames (%d SPURIOUS)' % spurious)
+print('node verdicts identical to sfd-replay for all %d frames (%d SPURIOUS)' % (frames, spurious))
 PYEOF
 
 # sfd's one log reader (apps/common/sfd_log_reader.h) reads the recording of Debian's lcm-logger
@@ -111,6 +136,6 @@ PYEOF
 # A log recorded by lcm-logger replays in sfd-replay (the recording also holds the node's own
 # outputs and LCM_SELF_TEST: they are copied, not interpreted).
 "$build/apps/sfd-replay" "$tmp/recorded.lcmlog" --summary "$tmp/rec.json" > "$tmp/rec.txt"
-grep -q '"processed": 60' "$tmp/rec.json" || {
+grep -q "\"processed\": $n_frames" "$tmp/rec.json" || {
   cat "$tmp/rec.txt"; echo "sfd-replay could not replay lcm-logger's recording"; exit 1; }
 echo "sfd-replay replayed lcm-logger's recording: $(sed -n 2p "$tmp/rec.txt")"

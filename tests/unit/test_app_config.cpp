@@ -547,11 +547,12 @@ void file_values_are_named(void **) {
                  "F:3: a control character or a non-ASCII byte outside a comment", "control byte");
     expect_equal(file_error("# \xc3\xa9t\xc3\xa9\nseed: 1"), "", "UTF-8 in a comment");
     // plain YAML without the %YAML:1.0 line (cv::FileStorage: "Input file is invalid"), and a
-    // comment above it (the same)
+    // comment, a blank line or a trailing space on line 1 (the same)
     const std::string header =
         "F:1: the first line must be %YAML:1.0 (cv::FileStorage, which reads the configuration, "
         "takes no file without it)";
-    for (const char *text : {"seed: 1\n", "---\nseed: 1\n", "# c\n%YAML:1.0\nseed: 1\n"}) {
+    for (const char *text : {"seed: 1\n", "---\nseed: 1\n", "# c\n%YAML:1.0\nseed: 1\n",
+                             "\nseed: 1\n", "\n%YAML:1.0\nseed: 1\n", "%YAML:1.0 \nseed: 1\n"}) {
         char plain[] = "/tmp/sfd_test_app_config_XXXXXX";
         const int pfd = mkstemp(plain);
         assert_true(pfd >= 0);

@@ -1277,6 +1277,9 @@ static void flagged_tracks_are_dropped_and_capacities_hold(void **state) {
 #ifndef SFD_TEST_WINDOW_PART
 #define SFD_TEST_WINDOW_PART 0
 #endif
+#if SFD_TEST_WINDOW_PART < 0 || SFD_TEST_WINDOW_PART > 2
+#error "SFD_TEST_WINDOW_PART is 0 (every test), 1 or 2"
+#endif
 enum { kStartNeesTests = 2 };
 
 int main(void) {

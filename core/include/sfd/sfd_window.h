@@ -86,7 +86,7 @@ typedef struct {
     double depth_var_floor_m2;       /**< added to the wire's depth variance (1e-4) */
     int32_t gauss_newton_iterations; /**< triangulation steps, 1..20 (5) */
     int32_t first_estimates;         /**< 1: first-estimate Jacobians (an option: over-confident in
-                                          unit.window's Monte Carlo from ten times the default P0,
+                                          unit.window_start_nees, from ten times the default P0,
                                           core/docs/window_filter.md); it overrides
                                           observability_constrained. 0: current estimates (0) */
     int32_t observability_constrained; /**< with first_estimates 0: 1 the current-estimate
