@@ -20,7 +20,11 @@ per observation flags it, for detectors that know more than any real one:
               GLR of the ramp's 2-vector over the slide so far (chi-square, 2 dof);
   window-5    the same over the newest 5 observations only (the longest window sfd's evidence
               test sees, SFD_MAX_WINDOW = 5), the old point still known;
-  single      the observation alone against the known old point (2 dof).
+  single      the observation alone against the known old point (2 dof);
+  remembered  the same against the old point's projection averaged over --memory N earlier
+              observations (its error sigma^2 / N per axis added to the residual's; poses still
+              exact: the closest of the four to a test against a point remembered from before
+              the window).
 
 The recall is pooled over labels (a long slide labels more frames), averaged over --events
 Monte Carlo slides (seeded). The model assumes every slide stays in the image; a real slide that
@@ -36,7 +40,7 @@ stayed as measured: 2 TP / (2 TP + FP + FN), per run, mean over the seeds of --m
 (apps/sim/euroc_semireal.hpp).
 
 Usage: drift_bound.py [--results RESULTS.csv] [--method both] [--alpha 0.01] [--events 20000]
-           [--seed 1] [--truth-window 2] [--sim-source apps/sim] [--rate-px MIN MAX]
+           [--seed 1] [--truth-window 2] [--memory 10] [--sim-source apps/sim] [--rate-px MIN MAX]
            [--frames MIN MAX] [--sigma-px S] [--scenarios mistracking moving-object]
 Exit 0; 2 for bad usage, an unreadable results file, or constants not found in the sim source."""
 import argparse
@@ -83,13 +87,13 @@ def sim_constants(src_dir):
             float(sg.group(1)))
 
 
-def bounds(consts, alpha, truth_window, events, seed):
+def bounds(consts, alpha, truth_window, events, seed, memory):
     """Pooled recall of each detector over the labels of `events` simulated slides."""
     vmin, vmax, dmin, dmax, sigma = consts
     z = norm.isf(alpha)
     thr = chi2.isf(alpha, 2)
     rng = random.Random(seed)
-    names = ("oracle", "known-start", "window-5", "single")
+    names = ("oracle", "known-start", "window-5", "single", "remembered")
     lam = []  # per label: the sums of squared coefficients (all so far, newest 5, own), v^2
     for _ in range(events):
         v = (vmin + (vmax - vmin) * rng.random()) / sigma
@@ -107,6 +111,7 @@ def bounds(consts, alpha, truth_window, events, seed):
         "known-start": ncx2.sf(thr, 2, cum * v2),
         "window-5": ncx2.sf(thr, 2, win * v2),
         "single": ncx2.sf(thr, 2, own * v2),
+        "remembered": ncx2.sf(thr, 2, own * v2 / (1.0 + 1.0 / memory)),
     }
     return {k: float(caught[k].mean()) for k in names}, len(lam) / events
 
@@ -162,6 +167,8 @@ def main():
     ap.add_argument("--events", type=int, default=20000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--truth-window", type=int, default=2)
+    ap.add_argument("--memory", type=int, default=10, metavar="N",
+                    help="observations the remembered point is averaged over (10)")
     ap.add_argument("--sim-source", default=os.path.join(_ROOT, "apps", "sim"))
     ap.add_argument("--rate-px", type=float, nargs=2, metavar=("MIN", "MAX"),
                     help="slide per frame (px), instead of the sim's constants")
@@ -175,8 +182,8 @@ def main():
     a = ap.parse_args()
     if not 0.0 < a.alpha < 0.5:
         fail(f"--alpha {a.alpha}: want 0 < alpha < 0.5")
-    if a.events < 1 or a.truth_window < 1:
-        fail("--events and --truth-window want integers >= 1")
+    if a.events < 1 or a.truth_window < 1 or a.memory < 1:
+        fail("--events, --truth-window and --memory want integers >= 1")
     consts = list(sim_constants(a.sim_source))
     if a.rate_px:
         consts[0:2] = a.rate_px
@@ -186,7 +193,7 @@ def main():
         consts[4] = a.sigma_px
     if not (0.0 <= consts[0] <= consts[1] and 1 <= consts[2] <= consts[3] and consts[4] > 0.0):
         fail("want 0 <= rate MIN <= MAX, 1 <= frames MIN <= MAX and sigma > 0")
-    rec, per_event = bounds(consts, a.alpha, a.truth_window, a.events, a.seed)
+    rec, per_event = bounds(consts, a.alpha, a.truth_window, a.events, a.seed, a.memory)
     vmin, vmax, dmin, dmax, sigma = consts
     print(f"slides: {vmin:g}-{vmax:g} px per frame for {dmin}-{dmax} frames, pixel noise "
           f"{sigma:g} px, W = {a.truth_window} ({per_event:.2f} labels per slide), alpha = "
