@@ -23,7 +23,7 @@ per observation flags it, for detectors that know more than any real one:
   single      the observation alone against the known old point (2 dof);
   remembered  the same against the old point's projection averaged over --memory N earlier
               observations (its error sigma^2 / N per axis added to the residual's; poses still
-              exact: the closest of the four to a test against a point remembered from before
+              exact: of these, the closest to a test against a point remembered from before
               the window).
 
 The recall is pooled over labels (a long slide labels more frames), averaged over --events
@@ -93,7 +93,6 @@ def bounds(consts, alpha, truth_window, events, seed, memory):
     z = norm.isf(alpha)
     thr = chi2.isf(alpha, 2)
     rng = random.Random(seed)
-    names = ("oracle", "known-start", "window-5", "single", "remembered")
     lam = []  # per label: the sums of squared coefficients (all so far, newest 5, own), v^2
     for _ in range(events):
         v = (vmin + (vmax - vmin) * rng.random()) / sigma
@@ -113,7 +112,7 @@ def bounds(consts, alpha, truth_window, events, seed, memory):
         "single": ncx2.sf(thr, 2, own * v2),
         "remembered": ncx2.sf(thr, 2, own * v2 / (1.0 + 1.0 / memory)),
     }
-    return {k: float(caught[k].mean()) for k in names}, len(lam) / events
+    return {k: float(p.mean()) for k, p in caught.items()}, len(lam) / events
 
 
 def f1_ceilings(path, method, alpha, recall, scenarios):

@@ -110,7 +110,8 @@ def main():
     def proj_jac(q, R_CW):
         return np.array([[1 / q[2], 0, -q[0] / q[2] ** 2], [0, 1 / q[2], -q[1] / q[2] ** 2]]) @ R_CW
 
-    hist = collections.defaultdict(list)  # track: [(frame, xn, Cn, R_CW, p_C, depth, var, flagged)]
+    # track: [(frame, xn, Cn^-1, R_CW, p_C, depth, depth var, flagged)]
+    hist = collections.defaultdict(list)
     rec = []  # (kind, replay status, NIS or None)
     h = 1e-3
     for fi, t in enumerate(sorted(u for u in feats if u in truth)):
@@ -140,13 +141,12 @@ def main():
                 ok = True
                 for _ in range(5):
                     A, b = np.zeros((3, 3)), np.zeros(3)
-                    for (_, xn, C, Rcw, pc, dep, dv, _f) in old:
+                    for (_, xn, Wi, Rcw, pc, dep, dv, _f) in old:
                         q = Rcw @ (p - pc)
                         if q[2] <= 1e-3:
                             ok = False
                             break
                         Jp = proj_jac(q, Rcw)
-                        Wi = np.linalg.inv(C)
                         A += Jp.T @ Wi @ Jp
                         b += Jp.T @ Wi @ (np.array(xn) - q[:2] / q[2])
                         if dep > 0:
@@ -171,7 +171,9 @@ def main():
                     nis = float(r @ np.linalg.solve(S, r))
             rec.append((kind.get(tid, -1), st, nis))
             flagged = st == 2 or (st == 1 and nis is not None and nis > thr)
-            H.append((fi, (x[i], y[i]), Cn, R_CW, p_C, F.depth[i], F.depth_var[i], flagged))
+            # the weight Cn^-1 kept, not Cn: every later triangulation of the track reads it
+            H.append((fi, (x[i], y[i]), np.linalg.inv(Cn), R_CW, p_C, F.depth[i],
+                      F.depth_var[i], flagged))
             if len(H) > a.window + a.memory + 40:
                 del H[0]
 
