@@ -152,12 +152,38 @@ static void started(sfd_nav_t *nav, int64_t utime) {
     }
 }
 
+static int rest_of_span(sfd_nav_t *nav, const sfd_imu_span_t *span, int32_t min_block,
+                        sfd_rest_result_t *rr);
+
 /* The window filter starts when the IMU of [t - init_rest_s, t] is at rest by the rest detector
  * (blocks of its default block_samples, as many whole blocks as the samples fill, up to its
  * default window, at least 2; with more samples than that window holds, the default number of
  * longer blocks): gravity's direction and the gyro bias from that window, position 0, yaw 0.
  * Not at rest: no start (not a rejection), the next frame tries again. */
 static int start_window_at_rest(sfd_nav_t *nav, const sfd_imu_span_t *span, int64_t t_us) {
+    sfd_rest_result_t rr;
+    const int r = rest_of_span(nav, span, 0, &rr);
+    if (r < 0) return SFD_REJECT_CORE;
+    if (r == 0 || !rr.at_rest) return SFD_REJECT_NONE;
+    const double *bias =
+        nav->cfg.gyro_bias_at_rest ? rr.gyro_mean_rad_s : nav->params.gyro_bias_rad_s;
+    if (sfd_window_start_at_rest(&nav->win, t_us, rr.accel_mean_m_s2, bias) != SFD_OK ||
+        sfd_window_to_ekf(&nav->win, &nav->ekf) != SFD_OK) {
+        return SFD_REJECT_CORE;
+    }
+    started(nav, t_us);
+    return SFD_REJECT_NONE;
+}
+
+/* The rest detector over the span's samples (in nav->work.rest): blocks of its default
+ * block_samples, as many whole blocks as the samples fill, up to its default window, at least 2;
+ * with more samples than that window holds, the default number of longer blocks; with fewer
+ * than 2 default blocks and min_block > 0, two blocks of half the samples, each at least
+ * min_block (their means scatter more at rest: the test is stricter, not looser). 1 with *rr
+ * evaluated (rr->ready set), 0 when the span holds fewer than 2 blocks, -1 when the detector
+ * refused its parameters. */
+static int rest_of_span(sfd_nav_t *nav, const sfd_imu_span_t *span, int32_t min_block,
+                        sfd_rest_result_t *rr) {
     const int32_t n = sfd_imu_span_count(span);
     sfd_rest_params_t rp;
     sfd_rest_params_default(&rp);
@@ -169,28 +195,42 @@ static int start_window_at_rest(sfd_nav_t *nav, const sfd_imu_span_t *span, int6
         const int32_t bs = n / rp.window_blocks;
         rp.block_samples = bs > 1000 ? 1000 : bs;
     }
+    if (min_block > 0 && n < 2 * rp.block_samples && n / 2 >= min_block) rp.block_samples = n / 2;
     int32_t blocks = n / rp.block_samples;
     if (blocks > rp.window_blocks) blocks = rp.window_blocks;
-    if (blocks < 2) return SFD_REJECT_NONE;
+    if (blocks < 2) return 0;
     rp.window_blocks = blocks;
-    if (sfd_rest_init(&nav->work.rest, &rp) != SFD_OK) return SFD_REJECT_CORE;
+    if (sfd_rest_init(&nav->work.rest, &rp) != SFD_OK) return -1;
     const int32_t first = n - blocks * rp.block_samples;
     for (int32_t i = first; i < n; ++i) {
         const sfd_imu_sample_t s = sfd_imu_span_at(span, i);
         (void)sfd_rest_push(&nav->work.rest, s.t_us, s.gyro_rad_s, s.accel_m_s2);
     }
+    return (sfd_rest_evaluate(&nav->work.rest, rr) == SFD_OK && rr->ready) ? 1 : 0;
+}
+
+/* The shortest block sfd_nav_imu_at_rest uses right after the IMU starts: 5 samples, 25 ms at
+ * 200 Hz, so that the second frame (50 ms in) can already be judged at rest. */
+enum { kRestMinBlockSamples = 5 };
+
+int sfd_nav_imu_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t since_us,
+                        int64_t t_us) {
+    if (nav == NULL || ring == NULL || !nav->cfg.enabled || ring->count < 2 || since_us > t_us) {
+        return 0;
+    }
+    const int64_t rest_us = (int64_t)(nav->cfg.init_rest_s * 1e6);
+    const int64_t oldest = ring->samples[ring->head].t_us;
+    int64_t from = (t_us > INT64_MIN + rest_us) ? t_us - rest_us : INT64_MIN;
+    if (from < oldest) from = oldest;
+    if (from > since_us) return 0; /* the IMU does not reach back to the previous frame */
+    sfd_imu_span_t span;
+    if (sfd_imu_ring_span(ring, from, t_us, SFD_IMU_RING_CAPACITY, &span) != SFD_REJECT_NONE) {
+        return 0;
+    }
+    /* the samples must reach the previous frame: the span starts at the last one at or before
+     * `from`, which is at or before since_us */
     sfd_rest_result_t rr;
-    if (sfd_rest_evaluate(&nav->work.rest, &rr) != SFD_OK || !rr.ready || !rr.at_rest) {
-        return SFD_REJECT_NONE;
-    }
-    const double *bias =
-        nav->cfg.gyro_bias_at_rest ? rr.gyro_mean_rad_s : nav->params.gyro_bias_rad_s;
-    if (sfd_window_start_at_rest(&nav->win, t_us, rr.accel_mean_m_s2, bias) != SFD_OK ||
-        sfd_window_to_ekf(&nav->win, &nav->ekf) != SFD_OK) {
-        return SFD_REJECT_CORE;
-    }
-    started(nav, t_us);
-    return SFD_REJECT_NONE;
+    return rest_of_span(nav, &span, kRestMinBlockSamples, &rr) == 1 && rr.at_rest;
 }
 
 /* Starts the filter from the IMU of [t - init_rest_s, t] (SPEC: at rest, gravity direction). */

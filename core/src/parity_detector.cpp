@@ -381,12 +381,14 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
     nf.utime = frame->utime;
     nf.num = frame->num_features;
     nf.translation_known = (motion != nullptr && have_prev) ? motion->translation_known : 0;
+    // The gyro's rotation is kept at rest too: the rest test assumes none, but when the features
+    // refuse rest the group test judges the frame with it. The translation is zero at rest.
     for (int k = 0; k < 9; ++k) {
         nf.R_CtoCprev[k] = (motion != nullptr && have_prev) ? motion->R_CcurToCprev[k]
                                                             : ((k % 4 == 0) ? 1.0 : 0.0);
     }
     for (int k = 0; k < 3; ++k) {
-        nf.p_CinCprev_m[k] = (motion != nullptr && have_prev && motion->translation_known)
+        nf.p_CinCprev_m[k] = (motion != nullptr && have_prev && motion->translation_known == 1)
                                  ? motion->p_CcurInCprev_m[k]
                                  : 0.0;
     }
@@ -481,6 +483,118 @@ void update_noise_scale(sfd_parity_t &det, float *u, int n) {
     double s = det.noise_scale * std::pow(m, 0.2);
     s = s < 0.04 ? 0.04 : (s > 25.0 ? 25.0 : s);
     det.noise_scale = s;
+}
+
+// The rest test (core/docs/parity_space.md "At rest"). The newest frame's motion is
+// SFD_MOTION_AT_REST: the IMU showed the camera still since the previous frame, so the paper's
+// known-translation case (Section III-A) holds with R = I and p = 0 between the frames: a static
+// point's undistorted normalized coordinates do not change, and the parity residual of a track
+// over the window is its observations' deviation from their weighted mean. For each feature
+// seen in the previous frame, over its newest m = min(L, run) observations back to the first
+// frame whose interval was not at rest (m >= 2), with Cov(x_k) = s C_k (C_k the stored J J^T, s
+// the pixel variance times the noise scale):
+//   xbar = (sum C_k^-1)^-1 sum C_k^-1 x_k,  gamma = sum (x_k - xbar)^T C_k^-1 (x_k - xbar) / s,
+// chi2(2 (m - 1)) for a static point (the depth is not observable at rest and needs no prior).
+// Flagged at chi2(2 (m - 1), 1 - alpha): no other test shares this frame. Over the same L frames
+// as the window test, so a step is flagged in the frames whose window holds both sides of it, as
+// the label windows count (apps/sim/SIMULATION.md); an alarm starts the track's segment again,
+// as the window test's does.
+// The IMU cannot tell rest from a constant velocity (nor a constant rotation from a gyro bias):
+// the features must agree. With fewer than kRestMinFeatures tested, or a median of gamma over
+// its chi2 median above kRestMedianRatio (a static scene's is within about 0.35 of 1 at 16
+// features, 0.12 at 150), the frame is not judged here (false: its motion becomes unknown
+// translation and the group test judges it). Otherwise the statistics also update the pixel noise
+// scale (update_noise_scale), which the filter's test then starts from.
+constexpr int kRestMinFeatures = 16;
+constexpr double kRestMedianRatio = 2.0;
+
+__attribute__((noinline)) bool test_at_rest(sfd_parity_t &det, sfd_verdict_t *out) {
+    sfd_parity_frame_t &nf = det.frames[det.head];
+    if (nf.translation_known != SFD_MOTION_AT_REST || det.count < 2) return false;
+    const int L = det.params.window_frames;
+    const int m_max = L < det.count ? L : det.count;
+    const double s = (det.params.pixel_noise_adapt ? det.noise_scale : 1.0) *
+                     det.params.pixel_sigma_px * det.params.pixel_sigma_px;
+    float *u = det.stat_scratch;
+    int n_u = 0;
+    for (int i = 0; i < nf.num; ++i) {
+        const sfd_parity_obs_t &o = nf.obs[i];
+        if (!o.valid || o.prev < 0) continue;
+        // the track's observations, newest first, with their weights W_k = C_k^-1
+        double x[SFD_MAX_WINDOW][2];
+        double W[SFD_MAX_WINDOW][3];
+        int m = 0;
+        int index = i;
+        for (int back = 0; back < m_max && index >= 0; ++back) {
+            if (back > 0 &&
+                det.frames[ring_index(det, back - 1)].translation_known != SFD_MOTION_AT_REST) {
+                break;
+            }
+            const sfd_parity_obs_t &q = det.frames[ring_index(det, back)].obs[index];
+            if (!q.valid) break;
+            const double c0 = static_cast<double>(q.jjt_px2[0]);
+            const double c1 = static_cast<double>(q.jjt_px2[1]);
+            const double c2 = static_cast<double>(q.jjt_px2[2]);
+            const double dc = c0 * c2 - c1 * c1;  // positive: ingest checked it
+            W[m][0] = c2 / dc;
+            W[m][1] = -c1 / dc;
+            W[m][2] = c0 / dc;
+            x[m][0] = static_cast<double>(q.xn[0]);
+            x[m][1] = static_cast<double>(q.xn[1]);
+            ++m;
+            index = q.prev;
+        }
+        if (m < 2) continue;
+        double A[3] = {0.0, 0.0, 0.0};
+        double b[2] = {0.0, 0.0};
+        for (int k = 0; k < m; ++k) {
+            for (int c = 0; c < 3; ++c) A[c] += W[k][c];
+            b[0] += W[k][0] * x[k][0] + W[k][1] * x[k][1];
+            b[1] += W[k][1] * x[k][0] + W[k][2] * x[k][1];
+        }
+        const double dA = A[0] * A[2] - A[1] * A[1];
+        if (!(dA > 0.0)) continue;
+        const double xbar0 = (A[2] * b[0] - A[1] * b[1]) / dA;
+        const double xbar1 = (A[0] * b[1] - A[1] * b[0]) / dA;
+        double g = 0.0;
+        for (int k = 0; k < m; ++k) {
+            const double d0 = x[k][0] - xbar0, d1 = x[k][1] - xbar1;
+            g += W[k][0] * d0 * d0 + 2.0 * W[k][1] * d0 * d1 + W[k][2] * d1 * d1;
+        }
+        const double gamma = g / s;
+        if (!std::isfinite(gamma)) continue;
+        const int dof = 2 * (m - 1);
+        // held in the verdict until the frame is confirmed at rest
+        sfd_feature_result_t &v = out->features[i];
+        v.statistic = gamma;
+        v.dof = static_cast<int16_t>(dof);
+        u[n_u++] = static_cast<float>(gamma / det.chi2_median.threshold[dof]);
+    }
+    const bool still = n_u >= kRestMinFeatures && median_in_place(u, n_u) <= kRestMedianRatio;
+    if (!still) {
+        nf.translation_known = 0;  // the camera moved: unknown translation for every test
+        for (int i = 0; i < nf.num; ++i) {
+            out->features[i].statistic = 0.0;
+            out->features[i].dof = 0;
+        }
+        return false;
+    }
+    for (int i = 0; i < nf.num; ++i) {
+        sfd_feature_result_t &v = out->features[i];
+        if (v.dof < 2) continue;
+        const double gamma = v.statistic;
+        const double thr = det.chi2.threshold[v.dof];
+        if (gamma > thr) {
+            set_verdict(&v, SFD_VERDICT_SPURIOUS, SFD_REASON_AT_REST, v.dof, gamma, thr);
+            v.fault_kind = SFD_FAULT_UNKNOWN;
+            out->flags |= SFD_FLAG_PARITY_ALARM;
+            nf.obs[i].segment = 1;
+        } else {
+            set_verdict(&v, SFD_VERDICT_CONSISTENT, SFD_REASON_AT_REST, v.dof, gamma, thr);
+        }
+    }
+    update_noise_scale(det, u, n_u);  // u was reordered by the median; its median is unchanged
+    return true;
 }
 
 // Loads feature i of the newest frame over its newest m frames into obs (oldest first), with the
@@ -743,11 +857,14 @@ extern "C" sfd_status_t sfd_parity_push_frame_filter(sfd_parity_t *det, const sf
     if (det->count > 0) {
         if (frame->utime <= det->frames[det->head].utime) return SFD_ERR_ORDER;
         if (motion == nullptr) return SFD_ERR_INVAL;
+        if (motion->translation_known != 0 && motion->translation_known != 1 &&
+            motion->translation_known != SFD_MOTION_AT_REST) {
+            return SFD_ERR_INVAL;
+        }
         if (!is_rotation(Eigen::Map<const Mat3>(motion->R_CcurToCprev), 1e-6)) {
             return SFD_ERR_INVAL;
         }
-        if (motion->translation_known != 0 && motion->translation_known != 1) return SFD_ERR_INVAL;
-        if (motion->translation_known && !all_finite(motion->p_CcurInCprev_m, 3)) {
+        if (motion->translation_known == 1 && !all_finite(motion->p_CcurInCprev_m, 3)) {
             return SFD_ERR_INVAL;
         }
     }
@@ -763,7 +880,9 @@ extern "C" sfd_status_t sfd_parity_push_frame_filter(sfd_parity_t *det, const sf
     if (det->count < kRing) det->count++;
 
     const bool want_filter = det->params.translation_known != 0 && filter != nullptr;
-    if (det->count < L) {
+    if (test_at_rest(*det, out)) {
+        out->flags |= SFD_FLAG_AT_REST;  // every feature seen before tested against its own past
+    } else if (det->count < L) {
         out->flags |= SFD_FLAG_WINDOW_FILLING;
     } else if (want_filter && test_with_filter(*det, filter, scratch, *ext, out)) {
         // every feature of the window tested alone (known translation from the filter)

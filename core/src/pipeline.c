@@ -446,6 +446,16 @@ static void run_parity(sfd_pipeline_t *p, const sfd_frame_t *frame, int imu_reas
                 !p->cfg.nav.window_filter) {
                 filter_translation(&p->nav, &motion);
             }
+            /* Until the window filter can test (started, with the window's older frames as
+             * clones): the IMU at rest since before the previous frame means no motion at all,
+             * the parity detector's rest test (core/docs/parity_space.md "At rest"). */
+            const int filter_tests =
+                filter_runs && (!p->cfg.nav.window_filter ||
+                                p->nav.win.num_clones >= p->cfg.params.window_frames - 1);
+            if (p->cfg.params.translation_known && !filter_tests &&
+                sfd_nav_imu_at_rest(&p->nav, &p->ring, p->prev_frame_utime, frame->utime)) {
+                motion.translation_known = SFD_MOTION_AT_REST;
+            }
         }
     }
     if (p->have_prev_frame && mp == NULL) {

@@ -183,12 +183,66 @@ static void a_spurious_verdict_ends_its_track_unless_it_condemns_the_whole(void 
     assert_int_equal(r.candidates, 0);
 }
 
+/* Fills the ring with n samples at 200 Hz from t0: at rest (gravity's reaction, a little noise)
+ * or, with accel_step != 0, an accelerometer swinging by accel_step sin(2 pi i / 33) (a vehicle
+ * pushed back and forth, 6 Hz, not in step with any block). */
+static sfd_imu_ring_t g_ring;
+static void fill_ring(int n, int64_t t0_us, double accel_step) {
+    sfd_imu_ring_init(&g_ring);
+    for (int i = 0; i < n; ++i) {
+        sfd_imu_sample_t s;
+        s.t_us = t0_us + 5000 * (int64_t)i;
+        const double wiggle = 1e-4 * ((i * 7919) % 13 - 6); /* deterministic, zero mean */
+        s.gyro_rad_s[0] = 0.002 + wiggle;
+        s.gyro_rad_s[1] = -0.001 - wiggle;
+        s.gyro_rad_s[2] = 0.0005 + wiggle;
+        s.accel_m_s2[0] = 0.1 * wiggle + accel_step * sin(2.0 * M_PI * i / 33.0);
+        s.accel_m_s2[1] = -0.1 * wiggle;
+        s.accel_m_s2[2] = 9.81 + 0.1 * wiggle;
+        assert_int_equal(sfd_imu_ring_push(&g_ring, &s), SFD_REJECT_NONE);
+    }
+}
+
+/* GIVEN an IMU at rest from t0 WHEN asking sfd_nav_imu_at_rest at the frames 50 ms apart THEN the
+ * second frame (11 samples: two blocks of 5) is already judged at rest, and every later one;
+ * GIVEN the accelerometer swinging by 1 m/s^2 THEN no frame is at rest;
+ * a previous frame before the oldest sample held, a time after t, a disabled filter or a null
+ * argument give 0. */
+static void imu_at_rest_from_the_second_frame_and_not_when_moving(void **state) {
+    (void)state;
+    sfd_nav_config_t cfg;
+    sfd_nav_config_default(&cfg);
+    sfd_params_t params;
+    sfd_params_default(&params);
+    assert_status(sfd_nav_init(&g_nav, &cfg, &params), SFD_OK);
+    const int64_t t0 = 1000000;
+    fill_ring(400, t0, 0.0);
+    for (int f = 1; f < 40; ++f) {
+        const int64_t t = t0 + 50000 * (int64_t)f;
+        assert_int_equal(sfd_nav_imu_at_rest(&g_nav, &g_ring, t - 50000, t), 1);
+    }
+    assert_int_equal(sfd_nav_imu_at_rest(&g_nav, &g_ring, t0 - 1, t0 + 50000), 0);
+    assert_int_equal(sfd_nav_imu_at_rest(&g_nav, &g_ring, t0 + 60000, t0 + 50000), 0);
+    assert_int_equal(sfd_nav_imu_at_rest(NULL, &g_ring, t0, t0 + 50000), 0);
+    assert_int_equal(sfd_nav_imu_at_rest(&g_nav, NULL, t0, t0 + 50000), 0);
+    fill_ring(400, t0, 1.0);
+    for (int f = 1; f < 40; ++f) {
+        const int64_t t = t0 + 50000 * (int64_t)f;
+        assert_int_equal(sfd_nav_imu_at_rest(&g_nav, &g_ring, t - 50000, t), 0);
+    }
+    cfg.enabled = 0;
+    assert_status(sfd_nav_init(&g_nav, &cfg, &params), SFD_OK);
+    fill_ring(400, t0, 0.0);
+    assert_int_equal(sfd_nav_imu_at_rest(&g_nav, &g_ring, t0 + 50000, t0 + 100000), 0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(nav_truth_start_takes_configured_biases),
         cmocka_unit_test(nav_init_nonfinite_accel_bias_refused),
         cmocka_unit_test(nav_build_matches_first_occurrence_of_previous_tracks),
         cmocka_unit_test(a_spurious_verdict_ends_its_track_unless_it_condemns_the_whole),
+        cmocka_unit_test(imu_at_rest_from_the_second_frame_and_not_when_moving),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

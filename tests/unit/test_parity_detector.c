@@ -394,6 +394,163 @@ static void detector_newest_xn_equals_undistort(void **state) {
     assert_status(sfd_parity_newest_xn(&g_det, g_frame.utime, 0, xn), SFD_ERR_INVAL);
 }
 
+/* A still camera (scene_init's camera and random generator) looking at n fixed pixels: one
+ * frame with each observed under N(0, sigma_px^2) noise plus offset_px (a mistrack), every
+ * frame's motion SFD_MOTION_AT_REST (rotation I, translation NaN: ignored at rest) or, with
+ * shift_px != 0, the whole image moving by shift_px per frame along u (a camera translating at
+ * constant velocity, which an IMU cannot tell from rest). */
+static double g_rest_uv[SCENE_MAX][2];
+static void rest_scene_init(uint64_t seed, int n, double sigma_px) {
+    scene_init(&g_scene, seed, n, sigma_px);
+    for (int i = 0; i < n; ++i) {
+        g_rest_uv[i][0] = 40.0 + 672.0 * sfd_prng_uniform(&g_scene.rng);
+        g_rest_uv[i][1] = 40.0 + 400.0 * sfd_prng_uniform(&g_scene.rng);
+    }
+}
+static void rest_scene_step(double shift_px, sfd_frame_motion_t *mo) {
+    memset(mo, 0, sizeof *mo);
+    for (int k = 0; k < 9; ++k) mo->R_CcurToCprev[k] = (k % 4 == 0) ? 1.0 : 0.0;
+    for (int k = 0; k < 3; ++k) mo->p_CcurInCprev_m[k] = NAN; /* ignored at rest */
+    mo->translation_known = SFD_MOTION_AT_REST;
+    g_frame.utime = g_scene.utime;
+    g_frame.num_features = g_scene.n;
+    for (int i = 0; i < g_scene.n; ++i) {
+        sfd_feature_t *f = &g_frame.features[i];
+        f->track_id = 1000 + i;
+        f->u_px = g_rest_uv[i][0] + shift_px * g_scene.frame + g_scene.offset_px[i][0] +
+                  g_scene.sigma_px * sfd_prng_gaussian(&g_scene.rng);
+        f->v_px = g_rest_uv[i][1] + g_scene.offset_px[i][1] +
+                  g_scene.sigma_px * sfd_prng_gaussian(&g_scene.rng);
+        f->depth_m = 0.0;
+        f->depth_var_m2 = 0.0;
+    }
+    g_scene.utime += 50000;
+    g_scene.frame++;
+}
+
+/* GIVEN a still camera (SFD_MOTION_AT_REST) and static points WHEN pushing 900 frames of 200
+ * features THEN from the second frame every feature is tested by the rest test
+ * (SFD_FLAG_AT_REST, SFD_REASON_AT_REST, dof 2 (m - 1) over min(L, frames) observations: 2 on
+ * the second frame, 4 from the third); counted in every third frame from the 21st (windows with
+ * no observation in common: independent trials), the rate of SPURIOUS verdicts is in the
+ * binomial 99% interval of alpha with the configured noise (1 px, pixel_noise_adapt 0), and with
+ * 0.5 px against 1 px configured the adapted noise scale is 0.25 +- 0.05 and the rate within
+ * [0.5, 1.3] alpha (the scale's frame-to-frame scatter costs about a tenth of alpha: the rate is
+ * convex in it). */
+static void detector_at_rest_flags_clean_features_at_alpha(void **state) {
+    (void)state;
+    SFD_REQ("SFD-PAR-021");
+    const double sigmas[2] = {1.0, 0.5};
+    for (int c = 0; c < 2; ++c) {
+        rest_scene_init(300 + (uint64_t)c, 200, sigmas[c]);
+        init_det(1, 1, 0.01);
+        if (c == 0) {
+            sfd_params_t p = g_det.params;
+            p.pixel_noise_adapt = 0;
+            assert_status(sfd_parity_init(&g_det, &p, &g_scene.cam), SFD_OK);
+        }
+        sfd_frame_motion_t mo;
+        long tested = 0, flagged = 0;
+        for (int f = 0; f < 900; ++f) {
+            rest_scene_step(0.0, &mo);
+            assert_status(sfd_parity_push_frame(&g_det, &g_frame, &mo, &g_out), SFD_OK);
+            if (f == 0) {
+                assert_int_equal(g_out.num_untested, g_frame.num_features);
+                continue;
+            }
+            assert_true(g_out.flags & SFD_FLAG_AT_REST);
+            assert_int_equal(g_out.num_untested, 0);
+            for (int i = 0; i < g_out.num_features; ++i) {
+                assert_int_equal(g_out.features[i].reason, SFD_REASON_AT_REST);
+                assert_int_equal(g_out.features[i].dof, f == 1 ? 2 : 4);
+            }
+            if (f < 20 || f % 3 != 0) continue; /* the noise scale settles; disjoint windows */
+            tested += g_out.num_consistent + g_out.num_spurious;
+            flagged += g_out.num_spurious;
+        }
+        const double p = (double)flagged / (double)tested;
+        const double half = 2.576 * sqrt(0.01 * 0.99 / (double)tested);
+        print_message("rest, sigma %.1f px: %ld of %ld flagged = %.4f (%.4f..%.4f), scale %.3f\n",
+                      sigmas[c], flagged, tested, p, 0.01 - half, 0.01 + half, g_det.noise_scale);
+        if (c == 0) {
+            assert_true(fabs(p - 0.01) <= half);
+        } else {
+            assert_true(fabs(g_det.noise_scale - 0.25) <= 0.05);
+            assert_true(p >= 0.005 && p <= 0.013);
+        }
+    }
+}
+
+/* GIVEN a still camera and a 6 px jump on every 10th feature at frame 40 WHEN pushing the frames
+ * THEN the rest test flags the jumped features in the two frames whose 3-frame window holds both
+ * sides of the jump (recall >= 0.95 in each) and passes them again once the window holds the
+ * new point only (at most 2 % flagged, as clean features are at 1 %). */
+static void detector_at_rest_flags_jump_in_windows_that_hold_it(void **state) {
+    (void)state;
+    SFD_REQ("SFD-PAR-021");
+    rest_scene_init(310, 200, 1.0);
+    init_det(1, 1, 0.01);
+    sfd_frame_motion_t mo;
+    int hit[3] = {0, 0, 0}, jumped = 0;
+    for (int f = 0; f < 43; ++f) {
+        if (f == 40) {
+            for (int i = 0; i < g_scene.n; i += 10) {
+                g_scene.offset_px[i][0] = 6.0 * cos(0.1 * i);
+                g_scene.offset_px[i][1] = 6.0 * sin(0.1 * i);
+                jumped += 1;
+            }
+        }
+        rest_scene_step(0.0, &mo);
+        assert_status(sfd_parity_push_frame(&g_det, &g_frame, &mo, &g_out), SFD_OK);
+        if (f < 40) continue;
+        assert_true(g_out.flags & SFD_FLAG_AT_REST);
+        for (int i = 0; i < g_scene.n; i += 10) {
+            hit[f - 40] += g_out.features[i].status == SFD_VERDICT_SPURIOUS;
+        }
+    }
+    print_message("rest, 6 px jumps: flagged %d, %d, %d of %d at frames 40, 41, 42\n", hit[0],
+                  hit[1], hit[2], jumped);
+    assert_true(hit[0] >= 0.95 * jumped && hit[1] >= 0.95 * jumped);
+    assert_true(hit[2] <= 0.02 * jumped + 1);
+}
+
+/* GIVEN motions that say SFD_MOTION_AT_REST while the image moves 3 px per frame (a constant
+ * velocity, which an IMU cannot tell from rest) WHEN pushing frames THEN the features disagree
+ * (their median statistic is far above chi2's), no frame is judged by the rest test (no
+ * SFD_FLAG_AT_REST, no SFD_REASON_AT_REST) and the unknown-translation group test judges them
+ * from the third frame (groups tested, at most 2 % of features SPURIOUS), byte for byte as a
+ * detector given the same motions with translation_known 0. */
+static void detector_at_rest_refused_when_features_move(void **state) {
+    (void)state;
+    SFD_REQ("SFD-PAR-021");
+    rest_scene_init(320, 120, 1.0);
+    init_det(1, 1, 0.01);
+    static sfd_parity_t twin;
+    assert_status(sfd_parity_init(&twin, &g_det.params, &g_scene.cam), SFD_OK);
+    sfd_frame_motion_t mo;
+    int tested = 0, flagged = 0;
+    for (int f = 0; f < 30; ++f) {
+        rest_scene_step(3.0, &mo);
+        assert_status(sfd_parity_push_frame(&g_det, &g_frame, &mo, &g_out), SFD_OK);
+        mo.translation_known = 0;
+        for (int k = 0; k < 3; ++k) mo.p_CcurInCprev_m[k] = 0.0;
+        assert_status(sfd_parity_push_frame(&twin, &g_frame, &mo, &g_out2), SFD_OK);
+        assert_verdicts_equal(&g_out, &g_out2);
+        assert_false(g_out.flags & SFD_FLAG_AT_REST);
+        for (int i = 0; i < g_out.num_features; ++i) {
+            assert_int_not_equal(g_out.features[i].reason, SFD_REASON_AT_REST);
+        }
+        if (f >= 2) {
+            assert_true(g_out.groups_tested > 0);
+            tested += g_out.num_consistent + g_out.num_spurious;
+            flagged += g_out.num_spurious;
+        }
+    }
+    print_message("image moving under 'at rest': %d of %d flagged by the group test\n", flagged,
+                  tested);
+    assert_true(tested > 0 && flagged <= 0.02 * tested);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(detector_window_fills_before_testing),
@@ -404,6 +561,9 @@ int main(void) {
         cmocka_unit_test(detector_deterministic_and_resettable),
         cmocka_unit_test(detector_rank_drop_uses_true_dof),
         cmocka_unit_test(detector_newest_xn_equals_undistort),
+        cmocka_unit_test(detector_at_rest_flags_clean_features_at_alpha),
+        cmocka_unit_test(detector_at_rest_flags_jump_in_windows_that_hold_it),
+        cmocka_unit_test(detector_at_rest_refused_when_features_move),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -285,6 +285,54 @@ static void judge_equals_the_three_stages_bit_for_bit(void **state) {
     assert_int_equal(g_p.nav.win_gated, 0);
 }
 
+/* GIVEN the hovering scene (the IMU at rest from the first sample, with the first frame) WHEN
+ * the pipeline judges its first 60 frames THEN from the second frame until the window filter
+ * can test (started after init_rest_s, with L - 1 clones) every frame is judged by the rest test
+ * (SFD_FLAG_AT_REST, every feature seen before tested with SFD_REASON_AT_REST), the frames after
+ * it by the filter's test (SFD_REASON_FEATURE_TEST, no SFD_FLAG_AT_REST); at most 2 % of the rest
+ * test's verdicts are SPURIOUS (the scene is clean before JUMP_FRAME). */
+static void frames_at_rest_are_judged_by_the_rest_test_until_the_filter_tests(void **state) {
+    (void)state;
+    start(&g_p);
+    sfd_prng_t rng;
+    sfd_prng_seed(&rng, 5);
+    int k = 0, first_filter = -1;
+    long rest_tests = 0, rest_flags = 0;
+    for (int f = 1; f <= 60; ++f) {
+        make_frame(&rng, f, &g_frame);
+        sfd_imu_sample_t s;
+        do {
+            imu_sample(&rng, ++k, &s);
+            assert_int_equal(sfd_pipeline_push_imu(&g_p, &s), SFD_REJECT_NONE);
+        } while (s.t_us < g_frame.utime);
+        assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_NONE);
+        assert_status(sfd_pipeline_judge(&g_p), SFD_OK);
+        const sfd_verdict_t *v = &sfd_pipeline_output(&g_p)->verdict;
+        const int at_rest = (v->flags & SFD_FLAG_AT_REST) != 0;
+        int by_filter = 0;
+        for (int i = 0; i < v->num_features; ++i) {
+            by_filter |= v->features[i].reason == SFD_REASON_FEATURE_TEST;
+        }
+        if (first_filter < 0 && by_filter) first_filter = f;
+        if (f == 1) {
+            assert_false(at_rest);
+        } else if (first_filter < 0) {
+            assert_true(at_rest);
+            for (int i = 0; i < v->num_features; ++i) {
+                assert_int_equal(v->features[i].reason, SFD_REASON_AT_REST);
+                rest_tests++;
+                rest_flags += v->features[i].status == SFD_VERDICT_SPURIOUS;
+            }
+        } else {
+            assert_false(at_rest);
+        }
+    }
+    print_message("rest test on frames 2..%d: %ld of %ld flagged\n", first_filter - 1, rest_flags,
+                  rest_tests);
+    assert_true(first_filter > 20 && first_filter < JUMP_FRAME);
+    assert_true(rest_flags <= 0.02 * rest_tests);
+}
+
 /* Feeds frames f0..f1 of the scene with every time shifted by offset_us (IMU up to each frame
  * first), judging every due frame. Returns the frames accepted; *judged counts the verdicts. */
 static int feed(sfd_pipeline_t *p, sfd_prng_t *rng, int *k, int f0, int f1, int64_t offset_us,
@@ -992,6 +1040,7 @@ int main(void) {
         cmocka_unit_test(frame_waits_for_its_imu_and_a_late_imu_makes_it_untested),
         cmocka_unit_test(stages_keep_their_order_and_slots_are_bounded),
         cmocka_unit_test(judge_equals_the_three_stages_bit_for_bit),
+        cmocka_unit_test(frames_at_rest_are_judged_by_the_rest_test_until_the_filter_tests),
         cmocka_unit_test(init_refuses_invalid_configurations),
         cmocka_unit_test(method_both_splits_alpha_between_its_stages),
         cmocka_unit_test(a_future_stamped_message_is_refused_and_never_the_reference),

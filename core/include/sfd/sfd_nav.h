@@ -112,7 +112,8 @@ typedef struct {
      *  association's update (sfd_pipeline_associate -> apply in sfd_pipeline_update); the
      *  window filter's part from its parity tests (sfd_pipeline_detect) and again in
      *  sfd_nav_finish(), after the association's update; the rest detector's within one
-     *  sfd_nav_advance() before the filter starts. Nothing in it survives a frame. */
+     *  sfd_nav_advance() before the filter starts or one sfd_nav_imu_at_rest() (before the
+     *  parity tests). Nothing in it survives a frame. */
     union {
         struct {
             sfd_match_t matches[SFD_MAX_FEATURES]; /**< filled by sfd_nav_build() */
@@ -123,8 +124,8 @@ typedef struct {
         /** the window filter's work space for its tests and its frame; the frame's
          *  observations are built in its u.obs */
         sfd_window_scratch_t window;
-        /** the rest detector of a start at rest: filled and evaluated within one call of
-         *  sfd_nav_advance() while the filter is not running (no window work then) */
+        /** the rest detector of a start at rest or of sfd_nav_imu_at_rest(): filled and
+         *  evaluated within one call */
         sfd_rest_t rest;
     } work;
     int16_t match_feature[SFD_MAX_FEATURES]; /**< feature index of each match */
@@ -165,6 +166,18 @@ void sfd_nav_set_camera(sfd_nav_t *nav, const sfd_camera_t *cam, const sfd_extri
  *         `starts`). SFD_REJECT_NONE also when it just started (no prior to associate yet).
  */
 int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us);
+
+/**
+ * @brief 1 when the IMU of [max(t_us - init_rest_s, the ring's oldest sample), t_us] is at rest by
+ *        the rest detector of the filter's start (the same blocks, at least 2; right after the IMU
+ *        starts, 2 shorter blocks of at least 5 samples each, so that from the second frame on a
+ *        frame can be judged) and that window reaches back to @p since_us (the previous frame): the
+ * camera did not move over [since_us, t_us] (the parity detector's rest test, SFD_MOTION_AT_REST).
+ * 0 otherwise, and for null arguments or a disabled filter. Uses nav->work (nothing in it survives
+ * a frame): call it outside the filter's and the association's stages. Rest and a constant velocity
+ * look alike to an IMU; the detector checks the features agree.
+ */
+int sfd_nav_imu_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t since_us, int64_t t_us);
 
 /**
  * @brief A TRUTH pose (init_from_truth only; ignored otherwise or once running): the first one

@@ -134,26 +134,29 @@ enum {
     SFD_REASON_NO_GROUP = 3,  /**< UNTESTED: too few testable features for a group or reference */
     SFD_REASON_RANK = 4,      /**< UNTESTED: geometry leaves no residual (nu = 0) */
     SFD_REASON_NUMERIC = 5,   /**< UNTESTED: noise covariance not positive definite */
-    SFD_REASON_GROUP_FAILED = 6,  /**< SPURIOUS: member of a failing group (paper's discard rule) */
-    SFD_REASON_ISOLATED = 7,      /**< decided by isolation inside / re-test outside its group */
-    SFD_REASON_INCONCLUSIVE = 8,  /**< SPURIOUS: group failed, isolation could not clear it */
-    SFD_REASON_FEATURE_TEST = 9,  /**< decided by the feature's own test with the translation
-                                       and Cov(z) from the window filter (every feature alone) */
-    SFD_REASON_EVIDENCE = 10,     /**< SPURIOUS: its window passed, but the test over its
-                                       observations since its last alarm at the full threshold
-                                       (up to evidence_frames frames) failed: slow drift or a
-                                       moving point */
-    SFD_REASON_ALARM_HOLD = 11,   /**< SPURIOUS: the track's last alarm_hold_frames
-                                       observations were flagged by the window test (evidence
-                                       flags, steps above alarm_hold_max_statistic and held
-                                       flags below alarm_hold_min_statistic times the full
-                                       threshold do not count) and its window test exceeds
-                                       alarm_hold_ratio times the threshold but not the threshold
-                                       (the statistic is relative to the lowered threshold, as a
-                                       held CONSISTENT verdict's is: > 1 still means rejected) */
-    SFD_REASON_EVIDENCE_RAMP = 12 /**< SPURIOUS: its window passed, but the ramp test over the
-                                       evidence test's frames failed (a constant-rate slide
-                                       against the static point; evidence_ramp_share) */
+    SFD_REASON_GROUP_FAILED = 6, /**< SPURIOUS: member of a failing group (paper's discard rule) */
+    SFD_REASON_ISOLATED = 7,     /**< decided by isolation inside / re-test outside its group */
+    SFD_REASON_INCONCLUSIVE = 8, /**< SPURIOUS: group failed, isolation could not clear it */
+    SFD_REASON_FEATURE_TEST = 9, /**< decided by the feature's own test with the translation
+                                      and Cov(z) from the window filter (every feature alone) */
+    SFD_REASON_EVIDENCE = 10,    /**< SPURIOUS: its window passed, but the test over its
+                                      observations since its last alarm at the full threshold
+                                      (up to evidence_frames frames) failed: slow drift or a
+                                      moving point */
+    SFD_REASON_ALARM_HOLD = 11,  /**< SPURIOUS: the track's last alarm_hold_frames
+                                      observations were flagged by the window test (evidence
+                                      flags, steps above alarm_hold_max_statistic and held
+                                      flags below alarm_hold_min_statistic times the full
+                                      threshold do not count) and its window test exceeds
+                                      alarm_hold_ratio times the threshold but not the threshold
+                                      (the statistic is relative to the lowered threshold, as a
+                                      held CONSISTENT verdict's is: > 1 still means rejected) */
+    SFD_REASON_EVIDENCE_RAMP = 12, /**< SPURIOUS: its window passed, but the ramp test over the
+                                        evidence test's frames failed (a constant-rate slide
+                                        against the static point; evidence_ramp_share) */
+    SFD_REASON_AT_REST = 13        /**< decided by the rest test: the camera did not move
+                                        (SFD_MOTION_AT_REST), so the feature must stay where its
+                                        earlier observations were (SFD_FLAG_AT_REST) */
 };
 
 /** Fault signature of a SPURIOUS feature (needs L >= 3 to tell them apart). */
@@ -169,6 +172,10 @@ enum { SFD_FAULT_NONE = 0, SFD_FAULT_JUMP = 1, SFD_FAULT_DRIFT = 2, SFD_FAULT_UN
     0x20u /**< translation_known is configured, but the window filter could not give the       \
                window's poses (not started, a frame it did not clone): the unknown-translation \
                group test of eqs. (29)-(33) judged this frame */
+#define SFD_FLAG_AT_REST                                                                      \
+    0x40u /**< the frame's motion was SFD_MOTION_AT_REST and its features confirmed it: every \
+               feature seen before was tested against its own earlier observations (the rest  \
+               test, SFD_REASON_AT_REST; sfd_parity_push_frame_filter) */
 
 /** One feature of an input frame. */
 typedef struct {
@@ -188,9 +195,16 @@ typedef struct {
 /** Camera motion from the previous frame to this one (unused for the first frame). */
 typedef struct {
     double R_CcurToCprev[9];   /**< camera rotation (from the gyro through the extrinsics) */
-    int32_t translation_known; /**< 1: p_CcurInCprev_m is the filter's estimate */
+    int32_t translation_known; /**< 0: unknown; 1: p_CcurInCprev_m is the filter's estimate;
+                                    SFD_MOTION_AT_REST (2): the IMU showed the camera at rest
+                                    over the interval: the rest test assumes no rotation and no
+                                    translation (p is ignored; R is still the gyro's, for the
+                                    group test when the features refuse rest) */
     double p_CcurInCprev_m[3]; /**< current camera centre in the previous camera frame (m) */
 } sfd_frame_motion_t;
+
+/** sfd_frame_motion_t.translation_known: the camera was at rest between the two frames. */
+#define SFD_MOTION_AT_REST 2
 
 /** Verdict on one input feature (the LCM wire type of the same content is sfd_feature_verdict_t,
  *  generated from lcm_types/feature_verdict_t.lcm). */
@@ -313,6 +327,15 @@ sfd_status_t sfd_parity_newest_xn(const sfd_parity_t *det, int64_t utime, int32_
  * Features tracked through all L frames of the window are tested; the others are UNTESTED with
  * a reason. Features with bad values (non-finite, duplicate track id in the frame, a pixel the
  * camera model cannot undistort) are UNTESTED (BAD_INPUT) and do not enter the window.
+ *
+ * The rest test (core/docs/parity_space.md "At rest"): when @p motion says SFD_MOTION_AT_REST,
+ * from the second frame on, every feature seen in the previous frame is tested against the
+ * weighted mean of its earlier observations (those of its segment, at most evidence_frames - 1
+ * or L - 1 back, across intervals at rest): chi2(2) at alpha, SFD_REASON_AT_REST, whatever the
+ * window holds (no filter is needed: at rest the translation is known, zero). The features
+ * must agree: when fewer than 16 features are tested or the median of their statistics exceeds
+ * twice chi2(2)'s median, the camera moved after all (constant velocity, which the IMU cannot
+ * see): the frame is treated as one of unknown translation and judged as below.
  *
  * @param motion  camera motion since the previous frame (ignored for the first frame after init
  *                or reset; may be NULL then).
