@@ -227,8 +227,8 @@ int sfd_nav_imu_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t sinc
     if (sfd_imu_ring_span(ring, from, t_us, SFD_IMU_RING_CAPACITY, &span) != SFD_REJECT_NONE) {
         return 0;
     }
-    /* the samples must reach the previous frame: the span starts at the last one at or before
-     * `from`, which is at or before since_us */
+    /* the span starts at the last sample at or before `from` (at or before since_us); the whole
+     * blocks may leave out fewer than one block of samples at its start */
     sfd_rest_result_t rr;
     return rest_of_span(nav, &span, kRestMinBlockSamples, &rr) == 1 && rr.at_rest;
 }

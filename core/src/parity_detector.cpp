@@ -499,22 +499,35 @@ void update_noise_scale(sfd_parity_t &det, float *u, int n) {
 // as the window test, so a step is flagged in the frames whose window holds both sides of it, as
 // the label windows count (apps/sim/SIMULATION.md); an alarm starts the track's segment again,
 // as the window test's does.
-// The IMU cannot tell rest from a constant velocity (nor a constant rotation from a gyro bias):
-// the features must agree. With fewer than kRestMinFeatures tested, or a median of gamma over
-// its chi2 median above kRestMedianRatio (a static scene's is within about 0.35 of 1 at 16
-// features, 0.12 at 150), the frame is not judged here (false: its motion becomes unknown
-// translation and the group test judges it). Otherwise the statistics also update the pixel noise
-// scale (update_noise_scale), which the filter's test then starts from.
+// The IMU's rest detector tests the scatter of block means and |a| = g: it cannot tell rest from
+// a constant velocity, a small constant acceleration or a constant rotation (taken for a gyro
+// bias), so the features must agree. The gate uses the configured pixel noise, not the adapted
+// scale, so that the scale, which accepted frames update, cannot grow behind a slowly growing
+// motion: the median over the tested features of gamma over its chi2 median, times the noise
+// scale (gamma with the configured noise), must be at most kRestMedianRatio, with at least
+// kRestMinFeatures tested. A still scene exceeds it with probability 0.01-0.03 at 16 features on
+// the second frame (2 dof), 0.001 from the third (4 dof), 1e-10 at 150 features (binomial counts
+// of chi2 tails). Otherwise the frame is not judged here (false: its motion becomes unknown
+// translation and the group test judges it, as without the rest test). While rest is accepted the
+// scale therefore stays below kRestMedianRatio / median, and the statistics update it
+// (update_noise_scale), which the filter's test then starts from. A feature that has earlier
+// observations but no statistic (a singular weight sum, a statistic that is not finite) is
+// UNTESTED with SFD_REASON_NUMERIC.
 constexpr int kRestMinFeatures = 16;
 constexpr double kRestMedianRatio = 2.0;
+static_assert(2 * (SFD_MAX_WINDOW - 1) <= SFD_CHI2_MAX_DOF,
+              "the rest test's dof 2 (m - 1) must index the chi-square tables");
 
 __attribute__((noinline)) bool test_at_rest(sfd_parity_t &det, sfd_verdict_t *out) {
     sfd_parity_frame_t &nf = det.frames[det.head];
-    if (nf.translation_known != SFD_MOTION_AT_REST || det.count < 2) return false;
+    if (nf.translation_known != SFD_MOTION_AT_REST || det.count < 2 ||
+        det.params.translation_known == 0) {
+        return false;
+    }
     const int L = det.params.window_frames;
     const int m_max = L < det.count ? L : det.count;
-    const double s = (det.params.pixel_noise_adapt ? det.noise_scale : 1.0) *
-                     det.params.pixel_sigma_px * det.params.pixel_sigma_px;
+    const double scale = det.params.pixel_noise_adapt ? det.noise_scale : 1.0;
+    const double s = scale * det.params.pixel_sigma_px * det.params.pixel_sigma_px;
     float *u = det.stat_scratch;
     int n_u = 0;
     for (int i = 0; i < nf.num; ++i) {
@@ -545,6 +558,8 @@ __attribute__((noinline)) bool test_at_rest(sfd_parity_t &det, sfd_verdict_t *ou
             index = q.prev;
         }
         if (m < 2) continue;
+        sfd_feature_result_t &v = out->features[i];
+        v.dof = -1;  // earlier observations, no statistic yet (NUMERIC if it stays so)
         double A[3] = {0.0, 0.0, 0.0};
         double b[2] = {0.0, 0.0};
         for (int k = 0; k < m; ++k) {
@@ -565,12 +580,12 @@ __attribute__((noinline)) bool test_at_rest(sfd_parity_t &det, sfd_verdict_t *ou
         if (!std::isfinite(gamma)) continue;
         const int dof = 2 * (m - 1);
         // held in the verdict until the frame is confirmed at rest
-        sfd_feature_result_t &v = out->features[i];
         v.statistic = gamma;
         v.dof = static_cast<int16_t>(dof);
         u[n_u++] = static_cast<float>(gamma / det.chi2_median.threshold[dof]);
     }
-    const bool still = n_u >= kRestMinFeatures && median_in_place(u, n_u) <= kRestMedianRatio;
+    const bool still =
+        n_u >= kRestMinFeatures && scale * median_in_place(u, n_u) <= kRestMedianRatio;
     if (!still) {
         nf.translation_known = 0;  // the camera moved: unknown translation for every test
         for (int i = 0; i < nf.num; ++i) {
@@ -581,6 +596,10 @@ __attribute__((noinline)) bool test_at_rest(sfd_parity_t &det, sfd_verdict_t *ou
     }
     for (int i = 0; i < nf.num; ++i) {
         sfd_feature_result_t &v = out->features[i];
+        if (v.dof == -1) {
+            v.dof = 0;
+            v.reason = SFD_REASON_NUMERIC;
+        }
         if (v.dof < 2) continue;
         const double gamma = v.statistic;
         const double thr = det.chi2.threshold[v.dof];

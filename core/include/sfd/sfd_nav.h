@@ -169,13 +169,16 @@ int sfd_nav_advance(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t t_us);
 
 /**
  * @brief 1 when the IMU of [max(t_us - init_rest_s, the ring's oldest sample), t_us] is at rest by
- *        the rest detector of the filter's start (the same blocks, at least 2; right after the IMU
- *        starts, 2 shorter blocks of at least 5 samples each, so that from the second frame on a
- *        frame can be judged) and that window reaches back to @p since_us (the previous frame): the
- * camera did not move over [since_us, t_us] (the parity detector's rest test, SFD_MOTION_AT_REST).
- * 0 otherwise, and for null arguments or a disabled filter. Uses nav->work (nothing in it survives
- * a frame): call it outside the filter's and the association's stages. Rest and a constant velocity
- * look alike to an IMU; the detector checks the features agree.
+ *        the rest detector of the filter's start (the same blocks, at least 2; right after the
+ *        IMU starts, 2 shorter blocks of at least 5 samples each, so that at 200 Hz the second
+ *        frame at 20 Hz can be judged, at 100 Hz the third) and that window reaches back to
+ *        @p since_us (the previous frame), up to the samples its whole blocks leave out at its
+ *        start (fewer than one block: 5 ms right after the IMU starts). The parity detector's
+ *        rest test (SFD_MOTION_AT_REST) relies on it. 0 otherwise, and for null arguments or a
+ *        disabled filter. Uses nav->work (nothing in it survives a frame): call it outside the
+ *        filter's and the association's stages. The rest detector tests the scatter of block
+ *        means and |a| = g: a constant velocity, a small constant acceleration or a constant
+ *        rotation pass it; the parity detector checks that the features agree.
  */
 int sfd_nav_imu_at_rest(sfd_nav_t *nav, const sfd_imu_ring_t *ring, int64_t since_us, int64_t t_us);
 

@@ -328,22 +328,24 @@ sfd_status_t sfd_parity_newest_xn(const sfd_parity_t *det, int64_t utime, int32_
  * a reason. Features with bad values (non-finite, duplicate track id in the frame, a pixel the
  * camera model cannot undistort) are UNTESTED (BAD_INPUT) and do not enter the window.
  *
- * The rest test (core/docs/parity_space.md "At rest"): when @p motion says SFD_MOTION_AT_REST,
- * from the second frame on, every feature seen in the previous frame is tested against the
- * weighted mean of its earlier observations (those of its segment, at most evidence_frames - 1
- * or L - 1 back, across intervals at rest): chi2(2) at alpha, SFD_REASON_AT_REST, whatever the
- * window holds (no filter is needed: at rest the translation is known, zero). The features
- * must agree: when fewer than 16 features are tested or the median of their statistics exceeds
- * twice chi2(2)'s median, the camera moved after all (constant velocity, which the IMU cannot
- * see): the frame is treated as one of unknown translation and judged as below.
+ * The rest test (core/docs/parity_space.md "At rest"): with translation_known in the parameters
+ * and @p motion SFD_MOTION_AT_REST, from the second frame on, every feature seen in the previous
+ * frame is tested over its newest m = min(L, run) observations, back to the first frame whose
+ * interval was not at rest: their deviation from their weighted mean, chi2(2 (m - 1)) at alpha,
+ * SFD_REASON_AT_REST (SFD_REASON_NUMERIC when no statistic could be formed), whatever the window
+ * holds (no filter is needed: at rest the motion is known, none). The features must agree: when
+ * fewer than 16 are tested or, with the configured pixel noise, the median of their statistics
+ * over their chi2 medians exceeds 2, the camera moved after all (a constant velocity or a small
+ * constant acceleration, which an IMU's rest detector does not see): the frame is judged as one
+ * of unknown translation, as below, with the motion's rotation.
  *
  * @param motion  camera motion since the previous frame (ignored for the first frame after init
  *                or reset; may be NULL then).
  * @param out     verdict, one entry per input feature in input order (caller-owned).
- * @return SFD_OK; SFD_ERR_INVAL for null or a motion that is not a rotation / non-finite
- *         (window unchanged); SFD_ERR_CAPACITY for num_features outside [0, SFD_MAX_FEATURES]
- *         (window unchanged); SFD_ERR_ORDER for utime not after the previous frame's (window
- *         unchanged); SFD_ERR_STATE if not initialized.
+ * @return SFD_OK; SFD_ERR_INVAL for null or a motion that is not a rotation / non-finite / has a
+ *         translation_known other than 0, 1 and SFD_MOTION_AT_REST (window unchanged);
+ * SFD_ERR_CAPACITY for num_features outside [0, SFD_MAX_FEATURES] (window unchanged); SFD_ERR_ORDER
+ * for utime not after the previous frame's (window unchanged); SFD_ERR_STATE if not initialized.
  */
 sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
                                    const sfd_frame_motion_t *motion, sfd_verdict_t *out);
