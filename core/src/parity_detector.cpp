@@ -5,6 +5,7 @@
 #include "core_private.hpp"
 #include "parity_space.hpp"
 #include "rotation.hpp"
+#include "small_linalg.hpp"
 #include "sfd/sfd_camera.h"
 #include "sfd/sfd_parity.h"
 #include "track_index.h"
@@ -548,10 +549,11 @@ __attribute__((noinline)) bool test_at_rest(sfd_parity_t &det, sfd_verdict_t *ou
             const double c0 = static_cast<double>(q.jjt_px2[0]);
             const double c1 = static_cast<double>(q.jjt_px2[1]);
             const double c2 = static_cast<double>(q.jjt_px2[2]);
-            const double dc = c0 * c2 - c1 * c1;  // positive: ingest checked it
-            W[m][0] = c2 / dc;
-            W[m][1] = -c1 / dc;
-            W[m][2] = c0 / dc;
+            // positive: ingest checked it
+            const Mat2 Wk = la::inverse_2x2(c0, c1, c1, c2, la::det_2x2(c0, c1, c1, c2));
+            W[m][0] = Wk(0, 0);
+            W[m][1] = Wk(0, 1);
+            W[m][2] = Wk(1, 1);
             x[m][0] = static_cast<double>(q.xn[0]);
             x[m][1] = static_cast<double>(q.xn[1]);
             ++m;
@@ -567,7 +569,7 @@ __attribute__((noinline)) bool test_at_rest(sfd_parity_t &det, sfd_verdict_t *ou
             b[0] += W[k][0] * x[k][0] + W[k][1] * x[k][1];
             b[1] += W[k][1] * x[k][0] + W[k][2] * x[k][1];
         }
-        const double dA = A[0] * A[2] - A[1] * A[1];
+        const double dA = la::det_2x2(A[0], A[1], A[1], A[2]);
         if (!(dA > 0.0)) continue;
         const double xbar0 = (A[2] * b[0] - A[1] * b[1]) / dA;
         const double xbar1 = (A[0] * b[1] - A[1] * b[0]) / dA;

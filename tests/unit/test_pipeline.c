@@ -285,6 +285,20 @@ static void judge_equals_the_three_stages_bit_for_bit(void **state) {
     assert_int_equal(g_p.nav.win_gated, 0);
 }
 
+/* Frame f of the hovering scene into p: the IMU samples up to the frame (sample counter *k), the
+ * frame, and its verdict judged in one call. */
+static const sfd_verdict_t *judge_scene_frame(sfd_pipeline_t *p, sfd_prng_t *rng, int *k, int f) {
+    make_frame(rng, f, &g_frame);
+    sfd_imu_sample_t s;
+    do {
+        imu_sample(rng, ++*k, &s);
+        assert_int_equal(sfd_pipeline_push_imu(p, &s), SFD_REJECT_NONE);
+    } while (s.t_us < g_frame.utime);
+    assert_int_equal(sfd_pipeline_push_frame(p, &g_frame), SFD_REJECT_NONE);
+    assert_status(sfd_pipeline_judge(p), SFD_OK);
+    return &sfd_pipeline_output(p)->verdict;
+}
+
 /* GIVEN the hovering scene (the IMU at rest from the first sample, with the first frame) WHEN
  * the pipeline judges its first 60 frames THEN from the second frame until the window filter
  * can test (started after init_rest_s, with L - 1 clones) every frame is judged by the rest test
@@ -299,15 +313,7 @@ static void frames_at_rest_are_judged_by_the_rest_test_until_the_filter_tests(vo
     int k = 0, first_filter = -1;
     long rest_tests = 0, rest_flags = 0;
     for (int f = 1; f <= 60; ++f) {
-        make_frame(&rng, f, &g_frame);
-        sfd_imu_sample_t s;
-        do {
-            imu_sample(&rng, ++k, &s);
-            assert_int_equal(sfd_pipeline_push_imu(&g_p, &s), SFD_REJECT_NONE);
-        } while (s.t_us < g_frame.utime);
-        assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_NONE);
-        assert_status(sfd_pipeline_judge(&g_p), SFD_OK);
-        const sfd_verdict_t *v = &sfd_pipeline_output(&g_p)->verdict;
+        const sfd_verdict_t *v = judge_scene_frame(&g_p, &rng, &k, f);
         const int at_rest = (v->flags & SFD_FLAG_AT_REST) != 0;
         int by_filter = 0;
         for (int i = 0; i < v->num_features; ++i) {
@@ -714,15 +720,7 @@ static void drift_run(double drift_px, drift_run_t *out) {
     int flags_in_a_row[NPTS] = {0}; /* per track, ending at its previous observation */
     int k = 0;
     for (int f = 1; f <= 200; ++f) {
-        make_frame(&rng, f, &g_frame);
-        sfd_imu_sample_t s;
-        do {
-            imu_sample(&rng, ++k, &s);
-            assert_int_equal(sfd_pipeline_push_imu(&g_p, &s), SFD_REJECT_NONE);
-        } while (s.t_us < g_frame.utime);
-        assert_int_equal(sfd_pipeline_push_frame(&g_p, &g_frame), SFD_REJECT_NONE);
-        assert_status(sfd_pipeline_judge(&g_p), SFD_OK);
-        const sfd_verdict_t *v = &sfd_pipeline_output(&g_p)->verdict;
+        const sfd_verdict_t *v = judge_scene_frame(&g_p, &rng, &k, f);
         for (int i = 0; i < v->num_features; ++i) {
             /* an evidence flag deletes the track's earlier observations (drop 2), any other
              * flag ends the track before it (drop 1; core/docs/window_filter.md) */
