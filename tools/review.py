@@ -12,6 +12,12 @@ base64 PNGs, with four sections:
   verdicts    per frame (SFD_VERDICT): consistent / spurious / untested counts, the spurious
               fraction of the tested features (with TRUTH's own fraction when the log labels
               features), and the spurious and consistent verdicts by the stage that decided;
+              where TRUTH labels the features, the strict scores (an UNTESTED spurious
+              observation is a miss, as sfd-replay scores) and where the errors are: the
+              misses by fault kind and by the observation's place in its run of spurious labels
+              (1st, 2nd, 3rd or later), and the false alarms by how many of the track's frames
+              ago its last spurious label was (a fault seen late, after its labels end, or a
+              track never labelled);
   timing      per frame (SFD_TIMING, frame_processed = 1): ingest, parity, association,
               update, total and processing (total - publish) in us against SPEC's budget for the
               whole pipeline (p99.9 <= 1 ms, max <= 2 ms: ../shared/SPEC.md "Figures to reach",
@@ -68,6 +74,11 @@ STAGE_DURATIONS = (("ingest_us", "tab:cyan"), ("parity_us", "tab:blue"),
                    ("association_us", "tab:orange"), ("update_us", "tab:purple"),
                    ("publish_us", "tab:pink"))
 DURATION_NAMES = ("total_us", "processing_us") + tuple(n for n, _ in STAGE_DURATIONS)
+# truth_t's KIND_* values (lcm_types/truth_t.lcm)
+KIND_NAMES = {1: "jump", 2: "drift", 3: "moving", 4: "mismatch", 5: "unspecified"}
+KIND_UNSPECIFIED = 5
+# False alarms by the number of the track's frames since its last spurious label.
+SINCE_BINS = ("1", "2", "3-5", "6-10", ">10", "never")
 # SPEC "Figures to reach": whole pipeline on the host, 200 features per frame, L = 5.
 BUDGET_P999_US = 1000.0
 BUDGET_MAX_US = 2000.0
@@ -96,10 +107,11 @@ class Run:
     def __init__(self):
         # Each list is in log order, with the event's log timestamp (us): the x axis of every
         # figure, since the messages' own utimes can jump (a restarted publisher, a glitch).
-        self.verdicts = []    # (log time, utime, status array, stage array)
+        self.verdicts = []    # (log time, utime, status array, stage array, track ids)
         self.timing = []      # (log time, timing_t)
         self.states = []      # (log time, utime, position, position_var)
         self.truth = {}       # utime -> (position, {track_id: spurious})
+        self.kinds = {}       # utime -> {track_id: kind} (KIND_UNSPECIFIED in truth_v1_t logs)
         self.undecodable = {}  # channel -> count
         self.events = 0
         self.first_log_us = None
@@ -121,7 +133,7 @@ def read_log(path, sfd):
                     m = sfd.feature_verdict_t.decode(ev.data)
                     n = m.num_features
                     run.verdicts.append((ev.timestamp, m.utime, np.array(m.status[:n], dtype=int),
-                                         np.array(m.stage[:n], dtype=int)))
+                                         np.array(m.stage[:n], dtype=int), list(m.track_id[:n])))
                 elif ev.channel == "SFD_TIMING":
                     run.timing.append((ev.timestamp, sfd.timing_t.decode(ev.data)))
                 elif ev.channel == "SFD_STATE":
@@ -133,6 +145,11 @@ def read_log(path, sfd):
                     n = m.num_features
                     run.truth[m.utime] = (np.array(m.position),
                                           dict(zip(m.track_id[:n], m.spurious[:n])))
+                    kind = getattr(m, "kind", None)
+                    run.kinds[m.utime] = {
+                        tid: (int(kind[i]) if kind is not None else
+                              (KIND_UNSPECIFIED if m.spurious[i] else 0))
+                        for i, tid in enumerate(m.track_id[:n])}
             except ValueError:
                 run.undecodable[ev.channel] = run.undecodable.get(ev.channel, 0) + 1
     except (IOError, OSError, ValueError) as e:
@@ -167,6 +184,66 @@ def verdict_stats(run):
         if lab:
             truth_frac[i] = sum(1 for x in lab.values() if x) / len(lab)
     return counts, by_stage, frac, truth_frac
+
+
+def since_bin(since):
+    """SINCE_BINS's name for a track whose last spurious label was `since` of its frames ago."""
+    if since is None:
+        return "never"
+    if since <= 2:
+        return str(since)
+    return "3-5" if since <= 5 else ("6-10" if since <= 10 else ">10")
+
+
+def error_anatomy(run):
+    """Strict scores against TRUTH and where the errors are; None when no verdict's frame has
+    TRUTH labels. Every observation a verdict lists and TRUTH labels counts, as sfd-replay scores
+    it (apps/common/sfd_eval.cpp): spurious + SPURIOUS a detection, spurious + CONSISTENT or
+    UNTESTED a miss, clean + SPURIOUS a false alarm, clean + UNTESTED nothing. The frames of a
+    track are counted over the frames TRUTH labels it in, in log order of the verdicts."""
+    tp = fp = missed = missed_untested = clean_tested = 0
+    miss_kind = {name: 0 for name in KIND_NAMES.values()}
+    miss_place = {"1st": 0, "2nd": 0, "3rd+": 0}
+    fa_since = {b: 0 for b in SINCE_BINS}
+    tested_since = {b: 0 for b in SINCE_BINS}
+    frame_no, last_label, run_len = {}, {}, {}
+    labelled = False
+    for v in run.verdicts:
+        lab = run.truth.get(v[1], (None, {}))[1]
+        if not lab:
+            continue
+        kinds = run.kinds.get(v[1], {})
+        labelled = True
+        for status, tid in zip(v[2], v[4]):
+            if tid not in lab:
+                continue
+            k = frame_no.get(tid, 0)
+            frame_no[tid] = k + 1
+            if lab[tid]:
+                run_len[tid] = run_len.get(tid, 0) + 1 if last_label.get(tid) == k - 1 else 1
+                last_label[tid] = k
+                if status == 2:
+                    tp += 1
+                    continue
+                missed += 1
+                missed_untested += int(status == 0)
+                name = KIND_NAMES.get(kinds.get(tid, KIND_UNSPECIFIED), "unspecified")
+                miss_kind[name] += 1
+                n = run_len[tid]
+                miss_place["1st" if n == 1 else ("2nd" if n == 2 else "3rd+")] += 1
+            elif status != 0:
+                b = since_bin(k - last_label[tid] if tid in last_label else None)
+                clean_tested += 1
+                tested_since[b] += 1
+                if status == 2:
+                    fp += 1
+                    fa_since[b] += 1
+    if not labelled:
+        return None
+    f1 = 2 * tp / (2 * tp + fp + missed) if tp + fp + missed else float("nan")
+    return {"tp": tp, "fp": fp, "missed": missed, "missed_untested": missed_untested, "f1": f1,
+            "clean_tested": clean_tested, "miss_kind": miss_kind, "miss_place": miss_place,
+            "fa_since": fa_since, "tested_since": tested_since}
 
 
 def align_posyaw(est, gt):
@@ -483,6 +560,36 @@ def main():
            img(fig_verdicts(plt, secs([v[0] for v in run.verdicts]), counts, by_stage, frac,
                             truth_frac), "verdicts")]
     figures += 1
+    an = error_anatomy(run)
+    anatomy_lines = []
+    if an is not None:
+        sec.append("<p>Against TRUTH, strict scoring (an UNTESTED spurious observation is a miss, "
+                   "as sfd-replay scores; docs/evaluation.md “Detection scores”):</p>")
+        sec.append(table([("detections", an["tp"]), ("false alarms", an["fp"]),
+                          ("misses (of them UNTESTED)",
+                           f"{an['missed']} ({an['missed_untested']})"),
+                          ("F1", f"{an['f1']:.4f}")]))
+        sec.append("<p>Misses by fault kind (TRUTH's kind[]) and by the observation's place in "
+                   "its track's run of spurious labels (a step's first labelled frame is where "
+                   "the smallest offset is):</p>")
+        sec.append(table([tuple(an["miss_kind"].values()) + tuple(an["miss_place"].values())],
+                         tuple(an["miss_kind"]) + ("1st", "2nd", "3rd+")))
+        sec.append("<p>False alarms by how many of the track's frames ago its last spurious "
+                   "label was: at 1–2 the fault is seen after its labels end (a detector with a "
+                   "memory longer than the label window); “never” is a track never labelled "
+                   "spurious. The tested clean observations of each class give the rate:</p>")
+        sec.append(table([("false alarms",) + tuple(an["fa_since"].values()),
+                          ("clean tested",) + tuple(an["tested_since"].values())],
+                         ("frames since",) + SINCE_BINS))
+        anatomy_lines.append(
+            f"detection: tp {an['tp']} fp {an['fp']} missed {an['missed']} "
+            f"(untested {an['missed_untested']}) f1 {an['f1']:.4f}")
+        anatomy_lines.append("misses by kind: " + " ".join(
+            f"{k}={v}" for k, v in an["miss_kind"].items()) + "; by place: " + " ".join(
+            f"{k}={v}" for k, v in an["miss_place"].items()))
+        anatomy_lines.append("false alarms by frames since the track's last spurious label: " +
+                             " ".join(f"{b}={an['fa_since'][b]}/{an['tested_since'][b]}"
+                                      for b in SINCE_BINS))
     sections.append("\n".join(sec))
 
     # Timing.
@@ -613,7 +720,7 @@ Written by tools/review.py.</p>
     print(f"review.py {a.log}: wrote {out} ({figures} figures)")
     print(f"judged: frames {nframes} tested {tested} consistent {consistent} spurious {spurious} "
           f"untested {untested} frames_untested {frames_untested}")
-    for line in timing_lines + pos_lines + ([rej_line] if rej_line else []):
+    for line in anatomy_lines + timing_lines + pos_lines + ([rej_line] if rej_line else []):
         print(line)
     return 0
 

@@ -10,6 +10,11 @@
 #  - sfd-replay's OUT carries SFD_TIMING durations of 0, which the report says; on a copy of the
 #    log whose SFD_TIMING carry known durations (3 frames over 1 ms, 2 of them over 2 ms) it
 #    counts exactly those against the budget lines;
+#  - its strict scores against TRUTH equal the summary's (detections, false alarms, misses with
+#    the UNTESTED spurious ones), its false alarms by frames since the track's last spurious
+#    label add up to them, and on a copy of the log with two verdicts changed (a clean
+#    observation right after a run of spurious labels made SPURIOUS, the first spurious
+#    observation of a track's second run made CONSISTENT) exactly the bins they fall in move by one;
 #  - a log without SFD_VERDICT is exit 2 with a one-line message naming the file.
 # usage: review_report.sh BUILD_DIR SOURCE_DIR PYTHON PYTHONPATH_FOR_TYPES
 set -euo pipefail
@@ -33,7 +38,7 @@ rc=0; "$py" "$src/tools/review.py" "$tmp/in.lcmlog" -o "$tmp/bad.html" 2> "$tmp/
 PYTHONPATH="$pytypes" "$py" - "$tmp" "$src" "$py" <<'PYEOF'
 import base64, json, re, subprocess, sys
 import lcm
-from sfd import timing_t
+from sfd import feature_verdict_t, timing_t, truth_t
 d, src, py = sys.argv[1:4]
 html = open(f"{d}/report.html", encoding="utf-8").read()
 out = open(f"{d}/review.txt").read()
@@ -72,6 +77,83 @@ assert abs(float(m.group(2)) - tr["rmse_raw_m"]) <= 1e-5 * tr["rmse_raw_m"], (m.
 assert re.search(r"position: %d states" % tr["frames"], out), (out, tr["frames"])
 assert "every duration 0" in out and "Every duration in this log is 0" in html
 
+# Strict scores and where the errors are, against the summary.
+def anatomy(text):
+    m = re.search(r"detection: tp (\d+) fp (\d+) missed (\d+) \(untested (\d+)\) f1 ([0-9.]+)",
+                  text)
+    assert m, text
+    kinds = re.search(r"misses by kind: (.*); by place: (.*)", text)
+    since = re.search(r"false alarms by frames since the track's last spurious label: (.*)", text)
+    assert kinds and since, text
+    parse = lambda s: {k: v for k, v in (kv.split("=") for kv in s.split())}
+    return (list(map(int, m.groups()[:4])), float(m.group(5)),
+            {k: int(v) for k, v in parse(kinds.group(1)).items()},
+            {k: int(v) for k, v in parse(kinds.group(2)).items()},
+            {k: tuple(map(int, v.split("/"))) for k, v in parse(since.group(1)).items()})
+det = summ["detection"]
+(tp, fp, missed, missed_untested), f1, by_kind, by_place, by_since = anatomy(out)
+assert (tp, fp) == (det["tp"], det["fp"]), (tp, fp, det)
+assert (missed, missed_untested) == (det["fn"] + det["untested_spurious"],
+                                     det["untested_spurious"]), (missed, det)
+assert abs(f1 - det["f1"]) < 1e-4, (f1, det["f1"])
+assert sum(by_kind.values()) == missed == sum(by_place.values()), (by_kind, by_place, missed)
+for name, k in det["by_kind"].items():
+    assert by_kind[name] == k["spurious"] - k["detected"], (name, by_kind, k)
+assert sum(a for a, _ in by_since.values()) == fp, by_since
+assert sum(n for _, n in by_since.values()) == det["tn"] + fp, (by_since, det)
+
+# Two verdicts changed in a copy: the first clean CONSISTENT observation that follows a track's
+# spurious label in its next frame becomes SPURIOUS (bin "1"), and the first SPURIOUS
+# observation that starts a track's second (or later) run of spurious labels becomes
+# CONSISTENT (a miss in place 1st: the run count starts again). Labels by utime; a track's
+# previous frame is its previous labelled frame.
+labels, order = {}, []
+for ev in lcm.EventLog(f"{d}/out.lcmlog", "r"):
+    if ev.channel == "TRUTH":
+        t = truth_t.decode(ev.data)
+        labels[t.utime] = {t.track_id[i]: t.spurious[i] for i in range(t.num_features)}
+prev, flip, seen_label = {}, {}, set()
+for ev in lcm.EventLog(f"{d}/out.lcmlog", "r"):
+    if ev.channel != "SFD_VERDICT":
+        continue
+    v = feature_verdict_t.decode(ev.data)
+    lab = labels.get(v.utime, {})
+    for i in range(v.num_features):
+        tid = v.track_id[i]
+        if tid not in lab:
+            continue
+        was = prev.get(tid)
+        if "fa" not in flip and was == 1 and lab[tid] == 0 and v.status[i] == 1:
+            flip["fa"] = (v.utime, tid)
+        if "miss" not in flip and was == 0 and tid in seen_label and lab[tid] == 1 and \
+                v.status[i] == 2:
+            flip["miss"] = (v.utime, tid)
+        prev[tid] = lab[tid]
+        if lab[tid]:
+            seen_label.add(tid)
+assert len(flip) == 2, flip
+dst = lcm.EventLog(f"{d}/flipped.lcmlog", "w", overwrite=True)
+for ev in lcm.EventLog(f"{d}/out.lcmlog", "r"):
+    data = ev.data
+    if ev.channel == "SFD_VERDICT":
+        v = feature_verdict_t.decode(data)
+        v.status = list(v.status)  # decoded arrays are tuples
+        for i in range(v.num_features):
+            if (v.utime, v.track_id[i]) == flip["fa"]:
+                v.status[i] = 2
+            if (v.utime, v.track_id[i]) == flip["miss"]:
+                v.status[i] = 1
+        data = v.encode()
+    dst.write_event(ev.timestamp, ev.channel, data)
+dst.close()
+r = subprocess.run([py, f"{src}/tools/review.py", f"{d}/flipped.lcmlog"], capture_output=True,
+                   text=True, check=True)
+(tp2, fp2, missed2, mu2), _, by_kind2, by_place2, by_since2 = anatomy(r.stdout)
+assert (tp2, fp2, missed2, mu2) == (tp - 1, fp + 1, missed + 1, missed_untested), r.stdout
+assert by_place2 == {**by_place, "1st": by_place["1st"] + 1}, (by_place, by_place2)
+assert by_since2 == {**by_since, "1": (by_since["1"][0] + 1, by_since["1"][1])}, by_since2
+assert sum(by_kind2.values()) == missed + 1, by_kind2
+
 # Timing against the budget: the same log with known SFD_TIMING durations.
 src_log = lcm.EventLog(f"{d}/out.lcmlog", "r")
 dst = lcm.EventLog(f"{d}/timed.lcmlog", "w", overwrite=True)
@@ -97,5 +179,6 @@ row = re.search(r"<tr><td>total_us</td>((?:<td>[^<]*</td>)+)</tr>", h).group(1)
 cells = re.findall(r"<td>([^<]*)</td>", row)
 assert cells == ["400", "4000", "4000", "4000", "3", "2"], cells  # nearest rank, 60 frames
 print(f"review_report: ok ({frames} frames, {tested} tested, {spurious} spurious, "
-      f"ATE {tr['ate_m']:.4f} m, {len(imgs)} figures)")
+      f"ATE {tr['ate_m']:.4f} m, {len(imgs)} figures; F1 {f1:.4f}, false alarms "
+      f"{fp}, of them {by_since['1'][0]} one frame after a fault's labels)")
 PYEOF
