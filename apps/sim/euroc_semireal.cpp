@@ -28,8 +28,12 @@
 //  - moving object: a group of tracks (a third of spurious_fraction of the slots) whose points
 //    move together at mover_speed in one horizontal direction, drawn anew every 2 s; spurious in
 //    every frame;
-//  - mistracked: a jump of jump_px in a random direction, or a drift of drift_px per frame for
-//    drift_frames frames; the track keeps the offset (it follows the wrong point);
+//  - mistracked: a jump of jump_px in a random direction onto the room's point there, or a
+//    drift of drift_px per frame for drift_frames frames that then locks onto the room's point
+//    under the slid pixel; either way the track then follows that static point for good, with
+//    its own depth prior (until 2026-11-29 the track kept the pixel offset from its old point's
+//    projection and that point's depth, so observations labelled clean after the label window
+//    matched no static point: apps/sim/SEMIREAL.md);
 //  - mismatched: the track's id jumps to another point of the room, 15-60 px away in the image.
 // A step (jump, drift step, mismatch) labels the track spurious in the truth_window frames from
 // the step: the windows of a detector with L = truth_window + 1 frames that mix observations from
@@ -362,12 +366,29 @@ int write_semireal_log(const SemirealOptions &opt) {
             bool vis = sfd_gt_project(&cam, R, pc, T.p_W, uv, &depth) != 0;
             const double ang = 2.0 * kPi * u_dir;
             if (vis && !fresh && !T.mover && u_event < p_event) {
-                if (u_kind < 1.0 / 3.0) {  // jump
-                    T.off_px[0] += opt.jump_px * std::cos(ang);
-                    T.off_px[1] += opt.jump_px * std::sin(ang);
-                    T.last_step = f;
-                    T.last_kind = SFD_TRUTH_T_KIND_JUMP;
-                    ++n_mistrack;
+                if (u_kind < 1.0 / 3.0) {
+                    // Jump: onto the room's point jump_px away from where the tracker is (either
+                    // side), followed for good with its own depth; a slide in progress ends.
+                    for (int side = 0; side < 2; ++side) {
+                        const double s = side ? -1.0 : 1.0;
+                        const double uv2[2] = {
+                            uv[0] + T.off_px[0] + s * opt.jump_px * std::cos(ang),
+                            uv[1] + T.off_px[1] + s * opt.jump_px * std::sin(ang)};
+                        double p2[3];
+                        if (uv2[0] < margin_px || uv2[0] > cam.width_px - margin_px ||
+                            uv2[1] < margin_px || uv2[1] > cam.height_px - margin_px ||
+                            !cast(uv2, R, pc, p2)) {
+                            continue;
+                        }
+                        std::memcpy(T.p_W, p2, sizeof p2);
+                        T.off_px[0] = T.off_px[1] = 0.0;
+                        T.drift_left = 0;
+                        T.last_step = f;
+                        T.last_kind = SFD_TRUTH_T_KIND_JUMP;
+                        ++n_mistrack;
+                        break;
+                    }
+                    vis = sfd_gt_project(&cam, R, pc, T.p_W, uv, &depth) != 0;
                 } else if (u_kind < 2.0 / 3.0) {  // drift, from this frame on
                     T.drift_px[0] = opt.drift_px * std::cos(ang);
                     T.drift_px[1] = opt.drift_px * std::sin(ang);
@@ -400,6 +421,18 @@ int write_semireal_log(const SemirealOptions &opt) {
                 T.drift_left--;
                 T.last_step = f;
                 T.last_kind = SFD_TRUTH_T_KIND_DRIFT;
+                if (T.drift_left == 0 && vis) {
+                    // The slide ends: the track locks onto the room's point under the slid pixel,
+                    // followed for good with its own depth (left out of view: replaced below).
+                    const double at[2] = {uv[0] + T.off_px[0], uv[1] + T.off_px[1]};
+                    double p2[3];
+                    if (at[0] >= 0 && at[0] < cam.width_px && at[1] >= 0 && at[1] < cam.height_px &&
+                        cast(at, R, pc, p2)) {
+                        std::memcpy(T.p_W, p2, sizeof p2);
+                        T.off_px[0] = T.off_px[1] = 0.0;
+                        vis = sfd_gt_project(&cam, R, pc, T.p_W, uv, &depth) != 0;
+                    }
+                }
             }
             double u = uv[0] + T.off_px[0], v = uv[1] + T.off_px[1];
             if (!vis || u < 0 || u >= cam.width_px || v < 0 || v >= cam.height_px) {

@@ -74,6 +74,84 @@ print(f"counts: {c['IMU']} IMU = CSV rows in the overlap ({(t1 - t0) * 1e-9:.3f}
 open(f"{d}/frames", "w").write(str(frames))
 PYEOF
 frames="$(cat "$tmp/frames")"
+
+# Faults onto static points: with no pixel noise and exact depth priors, each observation
+# back-projected through TRUTH's pose and CAMERA_INFO is its point in the world. A track's clean
+# observations between two of its faults (before the first, or after one's labels end) must be
+# one static point: within 1 mm, for tracks that never had a fault (checks the back-projection)
+# and for tracks after a jump or a drift (until 2026-11-29 those kept the pixel offset from their
+# old point's projection and its depth, and spread by centimetres). A track that never settles
+# after a fault is counted, and some of each kind must settle.
+"$sim" euroc-semireal --euroc "$data" -o "$tmp/e.lcmlog" --seed 5 --pixel-sigma-px 0 \
+  --depth-var-m2 0 >/dev/null
+PYTHONPATH="$pytypes" "$py" - "$tmp/e.lcmlog" <<'PYEOF'
+import collections, sys
+import numpy as np
+import lcm
+from sfd import camera_info_t, feature_frame_t, truth_t
+cam, feats, truth = None, {}, {}
+for ev in lcm.EventLog(sys.argv[1], "r"):
+    if ev.channel == "CAMERA_INFO" and cam is None:
+        cam = camera_info_t.decode(ev.data)
+    elif ev.channel == "FEATURES":
+        m = feature_frame_t.decode(ev.data)
+        feats[m.utime] = m
+    elif ev.channel == "TRUTH":
+        m = truth_t.decode(ev.data)
+        truth[m.utime] = m
+assert cam is not None and cam.distortion_model == camera_info_t.RADTAN, "cam0 is radtan"
+k1, k2, p1, p2 = cam.distortion
+T = np.array(cam.T_imu_cam).reshape(4, 4)
+def undistort(u, v):
+    """Normalized coordinates of a raw pixel: radial-tangential inverted by fixed point."""
+    xd, yd = (u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy
+    x, y = xd, yd
+    for _ in range(200):
+        r2 = x * x + y * y
+        rad = 1 + k1 * r2 + k2 * r2 * r2
+        x = (xd - 2 * p1 * x * y - p2 * (r2 + 2 * x * x)) / rad
+        y = (yd - p1 * (r2 + 2 * y * y) - 2 * p2 * x * y) / rad
+    return x, y
+def R_of(q):
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+segments = collections.defaultdict(list)   # (track, segment no) -> world points
+seg_no, after = collections.Counter(), {}  # after: the kind of the fault the segment follows
+state = {}
+for t in sorted(feats):
+    f, tr = feats[t], truth[t]
+    lab = {tr.track_id[i]: (tr.spurious[i], tr.kind[i]) for i in range(tr.num_features)}
+    Rw = R_of(tr.orientation)
+    for i in range(f.num_features):
+        tid = f.track_id[i]
+        spur, kind = lab[tid]
+        if spur:
+            if state.get(tid) != "fault":
+                seg_no[tid] += 1
+            state[tid], after[(tid, seg_no[tid])] = "fault", kind
+            continue
+        state[tid] = "clean"
+        x, y = undistort(f.u[i], f.v[i])
+        pc = f.depth[i] * np.array([x, y, 1.0])
+        segments[(tid, seg_no[tid])].append(Rw @ (T[:3, :3] @ pc + T[:3, 3]) +
+                                            np.array(tr.position))
+spread = collections.defaultdict(list)
+for key, pts in segments.items():
+    if len(pts) < 5 or (key[1] > 0 and after.get(key) == truth_t.KIND_MOVING):
+        continue
+    P = np.array(pts)
+    name = {0: "never"}.get(key[1], {truth_t.KIND_JUMP: "jump", truth_t.KIND_DRIFT: "drift",
+                                     truth_t.KIND_MISMATCH: "mismatch"}.get(after.get(key)))
+    spread[name].append(float(np.max(np.linalg.norm(P - P.mean(axis=0), axis=1))))
+for name in ("never", "jump", "drift", "mismatch"):
+    s = spread[name]
+    assert len(s) >= 20, (name, len(s))
+    assert max(s) < 1e-3, (name, len(s), sorted(s)[-5:])
+    print(f"static after {name:8s}: {len(s)} segments of >= 5 clean observations, largest "
+          f"spread {max(s) * 1e3:.2e} mm")
+PYEOF
 for m in none parity oprf ransac1 ransacf both; do
   "$build/apps/sfd-replay" "$tmp/a.lcmlog" --config "$tmp/a.yaml" --method "$m" \
     --summary "$tmp/$m.json" >/dev/null
