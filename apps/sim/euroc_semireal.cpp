@@ -264,6 +264,25 @@ int write_semireal_log(const SemirealOptions &opt) {
         }
         return sfd_gt_room_hit(room_lo, room_hi, p, d, out) == 0;
     };
+    // The room's point under the pixel r px from `from` in direction ang, or on the other side
+    // when that pixel is within margin_px of the border or casts onto nothing; false (out left
+    // as it was) when neither side serves.
+    auto step_onto = [&](const double from[2], double r, double ang, const double R[9],
+                         const double p[3], double out[3]) {
+        for (int side = 0; side < 2; ++side) {
+            const double s = side ? -1.0 : 1.0;
+            const double uv2[2] = {from[0] + s * r * std::cos(ang),
+                                   from[1] + s * r * std::sin(ang)};
+            double p2[3];
+            if (uv2[0] < margin_px || uv2[0] > cam.width_px - margin_px || uv2[1] < margin_px ||
+                uv2[1] > cam.height_px - margin_px || !cast(uv2, R, p, p2)) {
+                continue;
+            }
+            std::memcpy(out, p2, sizeof p2);
+            return true;
+        }
+        return false;
+    };
     auto spawn = [&](Track &T, const double R[9], const double p[3]) {
         T.alive = false;
         for (int tries = 0; tries < 32 && !T.alive; ++tries) {
@@ -369,24 +388,13 @@ int write_semireal_log(const SemirealOptions &opt) {
                 if (u_kind < 1.0 / 3.0) {
                     // Jump: onto the room's point jump_px away from where the tracker is (either
                     // side), followed for good with its own depth; a slide in progress ends.
-                    for (int side = 0; side < 2; ++side) {
-                        const double s = side ? -1.0 : 1.0;
-                        const double uv2[2] = {
-                            uv[0] + T.off_px[0] + s * opt.jump_px * std::cos(ang),
-                            uv[1] + T.off_px[1] + s * opt.jump_px * std::sin(ang)};
-                        double p2[3];
-                        if (uv2[0] < margin_px || uv2[0] > cam.width_px - margin_px ||
-                            uv2[1] < margin_px || uv2[1] > cam.height_px - margin_px ||
-                            !cast(uv2, R, pc, p2)) {
-                            continue;
-                        }
-                        std::memcpy(T.p_W, p2, sizeof p2);
+                    const double at[2] = {uv[0] + T.off_px[0], uv[1] + T.off_px[1]};
+                    if (step_onto(at, opt.jump_px, ang, R, pc, T.p_W)) {
                         T.off_px[0] = T.off_px[1] = 0.0;
                         T.drift_left = 0;
                         T.last_step = f;
                         T.last_kind = SFD_TRUTH_T_KIND_JUMP;
                         ++n_mistrack;
-                        break;
                     }
                     vis = sfd_gt_project(&cam, R, pc, T.p_W, uv, &depth) != 0;
                 } else if (u_kind < 2.0 / 3.0) {  // drift, from this frame on
@@ -395,22 +403,10 @@ int write_semireal_log(const SemirealOptions &opt) {
                     T.drift_left = opt.drift_frames;
                     ++n_mistrack;
                 } else {  // mismatch: another point 15-60 px away
-                    const double r = 15.0 + 45.0 * u_r;
-                    for (int side = 0; side < 2; ++side) {
-                        const double s = side ? -1.0 : 1.0;
-                        const double uv2[2] = {uv[0] + s * r * std::cos(ang),
-                                               uv[1] + s * r * std::sin(ang)};
-                        double p2[3];
-                        if (uv2[0] < margin_px || uv2[0] > cam.width_px - margin_px ||
-                            uv2[1] < margin_px || uv2[1] > cam.height_px - margin_px ||
-                            !cast(uv2, R, pc, p2)) {
-                            continue;
-                        }
-                        std::memcpy(T.p_W, p2, sizeof p2);
+                    if (step_onto(uv, 15.0 + 45.0 * u_r, ang, R, pc, T.p_W)) {
                         T.last_step = f;
                         T.last_kind = SFD_TRUTH_T_KIND_MISMATCH;
                         ++n_mismatch_events;
-                        break;
                     }
                     vis = sfd_gt_project(&cam, R, pc, T.p_W, uv, &depth) != 0;
                 }
