@@ -201,7 +201,7 @@ def error_anatomy(run):
     it (apps/common/sfd_eval.cpp): spurious + SPURIOUS a detection, spurious + CONSISTENT or
     UNTESTED a miss, clean + SPURIOUS a false alarm, clean + UNTESTED nothing. The frames of a
     track are counted over the frames TRUTH labels it in, in log order of the verdicts."""
-    tp = fp = missed = missed_untested = clean_tested = 0
+    tp = fp = missed = missed_untested = 0
     miss_kind = {name: 0 for name in KIND_NAMES.values()}
     miss_place = {"1st": 0, "2nd": 0, "3rd+": 0}
     fa_since = {b: 0 for b in SINCE_BINS}
@@ -233,7 +233,6 @@ def error_anatomy(run):
                 miss_place["1st" if n == 1 else ("2nd" if n == 2 else "3rd+")] += 1
             elif status != 0:
                 b = since_bin(k - last_label[tid] if tid in last_label else None)
-                clean_tested += 1
                 tested_since[b] += 1
                 if status == 2:
                     fp += 1
@@ -242,8 +241,8 @@ def error_anatomy(run):
         return None
     f1 = 2 * tp / (2 * tp + fp + missed) if tp + fp + missed else float("nan")
     return {"tp": tp, "fp": fp, "missed": missed, "missed_untested": missed_untested, "f1": f1,
-            "clean_tested": clean_tested, "miss_kind": miss_kind, "miss_place": miss_place,
-            "fa_since": fa_since, "tested_since": tested_since}
+            "miss_kind": miss_kind, "miss_place": miss_place, "fa_since": fa_since,
+            "tested_since": tested_since}
 
 
 def align_posyaw(est, gt):

@@ -107,7 +107,7 @@ assert sum(n for _, n in by_since.values()) == det["tn"] + fp, (by_since, det)
 # observation that starts a track's second (or later) run of spurious labels becomes
 # CONSISTENT (a miss in place 1st: the run count starts again). Labels by utime; a track's
 # previous frame is its previous labelled frame.
-labels, order = {}, []
+labels = {}
 for ev in lcm.EventLog(f"{d}/out.lcmlog", "r"):
     if ev.channel == "TRUTH":
         t = truth_t.decode(ev.data)
