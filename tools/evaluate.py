@@ -60,6 +60,7 @@ GRID = {"alpha": ("--false-alarm-rate", "false_alarm_rate"),
         "hold-max": ("--alarm-hold-max-statistic", "alarm_hold_max_statistic"),
         "hold-min": ("--alarm-hold-min-statistic", "alarm_hold_min_statistic"),
         "hold-alpha": ("--alarm-hold-alpha-scale", "alarm_hold_alpha_scale"),
+        "hold-dir": ("--alarm-hold-direction-alpha", "alarm_hold_direction_alpha"),
         "ramp": ("--evidence-ramp-share", "evidence_ramp_share")}
 PRESETS = {
     "quick": dict(scenarios=["mistracking", "moving-object"], seeds="1,2",

@@ -81,6 +81,11 @@ const KeyInfo kKeys[] = {
       "evidence test keeps alpha/2), (0, 1]"},
      Kind::kReal,
      SFD_DST(node.params.alarm_hold_alpha_scale)},
+    {{"alarm_hold_direction_alpha", "A",
+      "a held track with a fitted motion is tested one-sided along its direction at level A "
+      "instead of against the lowered threshold, [0, 0.5); 0: off"},
+     Kind::kReal,
+     SFD_DST(node.params.alarm_hold_direction_alpha)},
     {{"evidence_ramp_share", "S",
       "the ramp test's share of the evidence test's alpha/2 (the omnibus keeps the rest), [0, 1]; "
       "0: off"},

@@ -497,6 +497,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                                                 "alarm_hold_max_statistic",
                                                 "alarm_hold_min_statistic",
                                                 "alarm_hold_alpha_scale",
+                                                "alarm_hold_direction_alpha",
                                                 "evidence_ramp_share",
                                                 "default_depth_m",
                                                 "default_depth_var_m2",
@@ -530,6 +531,7 @@ static bool read_config_impl(const std::string &path, AppConfig *cfg, std::strin
                 {"alarm_hold_max_statistic", &p.alarm_hold_max_statistic},
                 {"alarm_hold_min_statistic", &p.alarm_hold_min_statistic},
                 {"alarm_hold_alpha_scale", &p.alarm_hold_alpha_scale},
+                {"alarm_hold_direction_alpha", &p.alarm_hold_direction_alpha},
                 {"evidence_ramp_share", &p.evidence_ramp_share},
                 {"default_depth_m", &p.default_depth_m},
                 {"default_depth_var_m2", &p.default_depth_var_m2},
@@ -708,6 +710,13 @@ class Checker {
             fail(key, format_double(v), "is not in [" + bound(lo) + ", " + bound(hi) + "]");
         }
     }
+    // lo <= v < hi.
+    void half_open_interval(const std::string &key, double v, double lo, double hi) {
+        finite(key, v);
+        if (!(v >= lo && v < hi)) {
+            fail(key, format_double(v), "is not in [" + bound(lo) + ", " + bound(hi) + ")");
+        }
+    }
     // lo < v < hi, or lo < v <= hi with hi_closed.
     void open_interval(const std::string &key, double v, double lo, double hi, bool hi_closed) {
         finite(key, v);
@@ -772,6 +781,7 @@ bool validate(const AppConfig &cfg, std::string *error) {
     c.closed_interval("alarm_hold_max_statistic", p.alarm_hold_max_statistic, 1.0, 1e6);
     c.closed_interval("alarm_hold_min_statistic", p.alarm_hold_min_statistic, 0.0, 1.0);
     c.open_interval("alarm_hold_alpha_scale", p.alarm_hold_alpha_scale, 0.0, 1.0, true);
+    c.half_open_interval("alarm_hold_direction_alpha", p.alarm_hold_direction_alpha, 0.0, 0.5);
     c.closed_interval("evidence_ramp_share", p.evidence_ramp_share, 0.0, 1.0);
     // stored as float by the parity detector (sfd_parity_obs_t)
     c.closed_interval("default_depth_m", p.default_depth_m, FLT_MIN, FLT_MAX);

@@ -23,6 +23,7 @@
 #include "sfd/sfd_config.h"
 #include "sfd/sfd_msckf.h"
 #include "sfd/sfd_status.h"
+#include "sfd/sfd_window.h"
 
 #pragma GCC poison malloc calloc realloc free aligned_alloc posix_memalign
 
@@ -194,10 +195,14 @@ inline double median_in_place(float *v, int n) {
 /// point's span). SFD_ERR_INVAL for rows outside 4..SFD_MSCKF_TRACK_ROWS or a tail of fewer than
 /// 4 rows; SFD_ERR_NUMERIC as sfd_msckf_track_statistic(); nothing written on error. The caller
 /// has checked the pointers.
+/// With motion_cols (rows x 2: the ramp over the tail's frames, zero elsewhere) and motion both
+/// given, *motion is that ramp's fit over the tail's rows (sfd_window_motion_t; ok 0 when the
+/// tail has fewer than 6 rows or the ramp lies in the point's span), from the same factorization.
 sfd_status_t msckf_statistic_tail(const sfd_msckf_track_t &t,
                                   const double (*S)[SFD_MSCKF_TRACK_ROWS], int tail_first,
                                   double gamma[2], int32_t dof[2], const double (*ramp_cols)[2],
-                                  double *ramp_glr);
+                                  double *ramp_glr, const double (*motion_cols)[2],
+                                  sfd_window_motion_t *motion);
 
 /// Q (rows x 3, row stride 3): an orthonormal basis of the range of the track's H_f (Householder
 /// reflections), so that N N^T = I - Q Q^T for the null-space basis N of eq. (2). False when H_f

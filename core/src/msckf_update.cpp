@@ -209,14 +209,15 @@ bool statistic_of_prefix(const double (*G)[kRows], const double *w, int n, doubl
     return true;
 }
 
-/// The ramp's GLR over the n whitened rows: with the point's columns G (3) and the ramp's F (2),
-/// c = M^-1 [G F]^T w for [G F]^T [G F] = M M^T; |c|^2 is the part of |w|^2 that the point and
-/// the ramp together explain, its first three entries the point's alone (the Cholesky factor of
-/// the Gram matrix nests), so the ramp's GLR is c_3^2 + c_4^2 (core/docs/parity_space.md
-/// "Ramp"). False when the five columns are not independent above rounding (the ramp lies in
-/// the point's span: no motion) or the result is not finite.
-bool ramp_glr_of(const double (*G)[kRows], const double (*F)[kRows], const double *w, int n,
-                 double *glr) {
+/// The point's columns G (3) and a 2-parameter fault's F over the n whitened rows, fitted
+/// together: [G F]^T [G F] = M M^T and c = M^-1 [G F]^T w. |c|^2 is the part of |w|^2 that the
+/// point and the fault together explain, its first three entries the point's alone (the Cholesky
+/// factor of the Gram matrix nests); the fault's lower-right block of M is the Cholesky factor
+/// of F^T P F and its entries of c are that factor's inverse times F^T P w, with P the projection
+/// off G (the Schur complement). False when the five columns are not independent above rounding
+/// (the fault lies in the point's span: no motion) or a result is not finite.
+bool point_and_fault(const double (*G)[kRows], const double (*F)[kRows], const double *w, int n,
+                     double M[5][5], double c5[5]) {
     const double *col[5] = {G[0], G[1], G[2], F[0], F[1]};
     double A[5][5];
     double b[5];
@@ -231,14 +232,37 @@ bool ramp_glr_of(const double (*G)[kRows], const double (*F)[kRows], const doubl
             A[d][c] = x;
         }
     }
-    double M[5][5];
     if (!la::cholesky(A, la::Dim<5>{}, M, 1e-12)) return false;
-    double c5[5];
     la::forward_solve(M, la::Dim<5>{}, b, c5);
+    return std::isfinite(c5[3]) && std::isfinite(c5[4]);
+}
+
+/// The ramp's GLR over the n whitened rows: c_3^2 + c_4^2 of point_and_fault() (the part of
+/// |w|^2 the ramp explains beyond the point; core/docs/parity_space.md "Ramp").
+bool ramp_glr_of(const double (*G)[kRows], const double (*F)[kRows], const double *w, int n,
+                 double *glr) {
+    double M[5][5];
+    double c5[5];
+    if (!point_and_fault(G, F, w, n, M, c5)) return false;
     const double g = c5[3] * c5[3] + c5[4] * c5[4];
     if (!std::isfinite(g)) return false;
     *glr = g;
     return true;
+}
+
+/// The motion's fit over the n whitened rows (sfd_window_motion_t): with the fault's block
+/// B = M[3..4][3..4] of point_and_fault() (lower triangular), info = B B^T and score = B c[3..4].
+bool motion_fit_of(const double (*G)[kRows], const double (*F)[kRows], const double *w, int n,
+                   sfd_window_motion_t *fit) {
+    double M[5][5];
+    double c5[5];
+    if (!point_and_fault(G, F, w, n, M, c5)) return false;
+    fit->info[0] = M[3][3] * M[3][3];
+    fit->info[1] = M[3][3] * M[4][3];
+    fit->info[2] = M[4][3] * M[4][3] + M[4][4] * M[4][4];
+    fit->score[0] = M[3][3] * c5[3];
+    fit->score[1] = M[4][3] * c5[3] + M[4][4] * c5[4];
+    return all_finite(fit->info, 3) && all_finite(fit->score, 2);
 }
 
 }  // namespace
@@ -247,7 +271,9 @@ bool ramp_glr_of(const double (*G)[kRows], const double (*F)[kRows], const doubl
 sfd_status_t sfd::msckf_statistic_tail(const sfd_msckf_track_t &t,
                                        const double (*S)[SFD_MSCKF_TRACK_ROWS], int tail_first,
                                        double gamma[2], int32_t dof[2],
-                                       const double (*ramp_cols)[2], double *ramp_glr) {
+                                       const double (*ramp_cols)[2], double *ramp_glr,
+                                       const double (*motion_cols)[2],
+                                       sfd_window_motion_t *motion) {
     const int rows = t.rows;
     const int tail = rows - tail_first;
     if (rows < 4 || rows > kRows || tail_first < 0 || (tail_first > 0 && tail < 4)) {
@@ -288,6 +314,22 @@ sfd_status_t sfd::msckf_statistic_tail(const sfd_msckf_track_t &t,
         double g = 0.0;
         *ramp_glr = (rows >= 6 && ramp_glr_of(G, F, w, rows, &g)) ? g : -1.0;
     }
+    if (motion_cols != nullptr && motion != nullptr) {
+        // the tail's rows are the first `tail` of the reversed system: its whitened columns are
+        // the prefix of the forward substitution (as for the tail's statistic)
+        double F[2][kRows];
+        for (int c = 0; c < 2; ++c) {
+            for (int i = 0; i < tail; ++i) F[c][i] = motion_cols[rows - 1 - i][c];
+            la::forward_solve(L, tail, F[c], F[c]);
+        }
+        sfd_window_motion_t fit{};
+        if (tail >= 6 && motion_fit_of(G, F, w, tail, &fit)) {
+            fit.ok = 1;
+        } else {
+            fit = sfd_window_motion_t{};  // ok 0, info and score 0
+        }
+        *motion = fit;
+    }
     gamma[0] = g_tail;
     dof[0] = (tail_first > 0) ? tail - 3 : 0;
     gamma[1] = g_all;
@@ -304,7 +346,8 @@ extern "C" sfd_status_t sfd_msckf_track_statistic(const sfd_msckf_track_t *t,
     }
     double g[2] = {0.0, 0.0};
     int32_t d[2] = {0, 0};
-    const sfd_status_t st = msckf_statistic_tail(*t, S, 0, g, d, nullptr, nullptr);
+    const sfd_status_t st =
+        msckf_statistic_tail(*t, S, 0, g, d, nullptr, nullptr, nullptr, nullptr);
     if (st != SFD_OK) return st;
     *gamma = g[1];
     *dof = d[1];

@@ -30,6 +30,7 @@ extern "C" sfd_status_t sfd_params_default(sfd_params_t *p) {
     p->alarm_hold_alpha_scale = 0.3;
     p->evidence_ramp_share = 0.0;
     p->alarm_hold_min_statistic = 0.0;
+    p->alarm_hold_direction_alpha = 0.0;
     return SFD_OK;
 }
 
@@ -65,6 +66,8 @@ extern "C" sfd_status_t sfd_params_validate(const sfd_params_t *p) {
         return SFD_ERR_INVAL;
     if (!(p->evidence_ramp_share >= 0.0 && p->evidence_ramp_share <= 1.0)) return SFD_ERR_INVAL;
     if (!(p->alarm_hold_min_statistic >= 0.0 && p->alarm_hold_min_statistic <= 1.0))
+        return SFD_ERR_INVAL;
+    if (!(p->alarm_hold_direction_alpha >= 0.0 && p->alarm_hold_direction_alpha < 0.5))
         return SFD_ERR_INVAL;
     return SFD_OK;
 }

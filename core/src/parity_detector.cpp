@@ -20,6 +20,34 @@ constexpr int kSlots = SFD_PARITY_HASH_SLOTS;
 // L of them, the evidence test (window-limited GLR) may reach back further.
 constexpr int kRing = SFD_MAX_WINDOW;
 
+// sfd_parity_obs_t.dir: no direction.
+constexpr int8_t kNoDirection = INT8_MIN;
+
+// The direction of (x, y) in one byte (parity_space.md "Directional hold"): the diamond angle
+// a = t for x >= 0 and 2 - t, -2 - t for x < 0 and t >= 0, t < 0, with t = y / (|x| + |y|),
+// a in [-2, 2] and monotonic in the angle, rounded to steps of 1 / 63.5 (-127..127).
+// Arithmetic only (no trigonometry), so every target stores the same bits; the angle is kept
+// to within half a degree. kNoDirection for a zero or non-finite vector.
+int8_t encode_direction(double x, double y) {
+    const double s = std::fabs(x) + std::fabs(y);
+    if (!(s > 0.0) || !std::isfinite(s)) return kNoDirection;
+    const double t = y / s;
+    const double a = (x >= 0.0) ? t : ((t >= 0.0) ? 2.0 - t : -2.0 - t);
+    const long q = std::lround(a * 63.5);
+    return static_cast<int8_t>(q > 127 ? 127 : (q < -127 ? -127 : q));
+}
+
+// The direction encode_direction() stored, as a vector on the diamond |x| + |y| = 1 (its length
+// does not matter to the one-sided statistic). False for kNoDirection.
+bool decode_direction(int8_t q, double d[2]) {
+    if (q == kNoDirection) return false;
+    const double a = static_cast<double>(q) / 63.5;
+    const double t = (a > 1.0) ? 2.0 - a : ((a < -1.0) ? -2.0 - a : a);
+    d[0] = (a > 1.0 || a < -1.0) ? -(1.0 - std::fabs(t)) : 1.0 - std::fabs(t);
+    d[1] = t;
+    return true;
+}
+
 // Ring slot of the frame `back` frames before the newest (0 = newest), back < det.count.
 int ring_index(const sfd_parity_t &det, int back) {
     return (det.head - back + kRing) % kRing;
@@ -412,6 +440,7 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
         o.run = 0;
         o.valid = 0;
         o.prior = 0;
+        o.dir = kNoDirection;
         o.segment = 0;
         o.alarm = 0;
         const double uv[2] = {f.u_px, f.v_px};
@@ -463,8 +492,8 @@ __attribute__((noinline)) void ingest(sfd_parity_t *det, const sfd_frame_t *fram
             const int p = hash_find(old_table, old_ids, pf.num, f.track_id);
             if (p >= 0 && pf.obs[p].valid) {
                 o.prev = static_cast<int16_t>(p);
-                o.run = static_cast<int16_t>(pf.obs[p].run >= SFD_MAX_WINDOW ? SFD_MAX_WINDOW
-                                                                             : pf.obs[p].run + 1);
+                o.run = static_cast<int8_t>(pf.obs[p].run >= SFD_MAX_WINDOW ? SFD_MAX_WINDOW
+                                                                            : pf.obs[p].run + 1);
                 o.segment = static_cast<int8_t>(
                     pf.obs[p].segment >= SFD_MAX_WINDOW ? SFD_MAX_WINDOW : pf.obs[p].segment + 1);
             }
@@ -659,9 +688,13 @@ void load_track(const sfd_parity_t &det, int i, int m, double scale, sfd_window_
 // alarm_hold_alpha_scale times its share of alpha (det.chi2_window), a factor measured on clean
 // logs (parity_space.md "Alarm hold"), not derived. The evidence test (with its ramp test) keeps
 // alpha / 2 and their alarms neither start nor continue the hold (their repeats would not be
-// paid for). A held alarm continues the hold only at or above alarm_hold_min_statistic times the
-// full threshold, and does not start the track's segment again (the segment runs from the last
-// alarm at the full threshold).
+// paid for), except with the directional hold. A held alarm continues the hold only at or above
+// alarm_hold_min_statistic times the full threshold, and does not start the track's segment
+// again (the segment runs from the last alarm at the full threshold). The directional hold
+// (parity_space.md "Directional hold"; alarm_hold_direction_alpha > 0): every test also fits a
+// ramp beside the point over the window test's frames and stores its direction; a held track
+// with a direction stored at its previous observation is tested one-sided along it instead of
+// against the lowered threshold, and an evidence or ramp alarm with a direction starts a run.
 __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t *filter,
                                                 sfd_window_scratch_t *scratch,
                                                 const sfd_extrinsics_t &ext, sfd_verdict_t *out) {
@@ -711,23 +744,35 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         // when that fails (e.g. an old observation puts the point behind a camera), or there is
         // no evidence window, the L-frame test alone.
         const int m_ev = newest.segment < m_max ? newest.segment : m_max;
+        // gam[0] the L-frame (or m_short-frame) test, gam[1] the evidence test, gam[2] the ramp's
+        // GLR; the motion fitted over the L-frame test's frames (the directional hold's)
         double gam[3] = {0.0, 0.0, 0.0};
         int32_t dofs[3] = {0, 0, 0};
+        // (fitted only with the directional hold on: without it the tests alone, bit for bit)
+        sfd_window_motion_t motion{};
+        sfd_window_motion_t *fit = det.hold_direction_z > 0.0 ? &motion : nullptr;
         sfd_status_t st = SFD_ERR_STATE;
         if (evidence && m_ev > L && m_short == L) {
             load_track(det, i, m_ev, scale, &obs);
-            st = ramp_on ? sfd_window_test_track_evidence(filter, &ext, &obs, L, scratch, gam, dofs)
-                         : sfd_window_test_track_nested(filter, &ext, &obs, L, scratch, gam, dofs);
+            st = sfd_window_test_track_motion(filter, &ext, &obs, L, ramp_on ? 1 : 0, scratch, gam,
+                                              dofs, fit);
         }
         const bool have_evidence = (st == SFD_OK);
         if (!have_evidence) {
             load_track(det, i, m_short, scale, &obs);
-            st = sfd_window_test_track(filter, &ext, &obs, scratch, &gam[0], &dofs[0]);
+            st = sfd_window_test_track_motion(filter, &ext, &obs, 0, 0, scratch, gam, dofs, fit);
         }
         sfd_feature_result_t *v = &out->features[i];
         if (st != SFD_OK || dofs[0] < 1 || dofs[0] > SFD_PARITY_MAX_RESIDUAL) {
             v->reason = (st == SFD_ERR_NUMERIC) ? SFD_REASON_RANK : SFD_REASON_NUMERIC;
             continue;
+        }
+        // The motion's direction, v = info^-1 score up to the positive factor det(info), for the
+        // next observation's directional hold.
+        if (motion.ok != 0) {
+            newest.dir = encode_direction(
+                motion.info[2] * motion.score[0] - motion.info[1] * motion.score[1],
+                motion.info[0] * motion.score[1] - motion.info[1] * motion.score[0]);
         }
         // consecutive alarms of the track before this observation
         const int run_before = newest.prev >= 0 ? pf.obs[newest.prev].alarm : 0;
@@ -737,12 +782,36 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
         const double full = tab.threshold[dofs[0]];
         double thr = held ? hold * full : full;  // the threshold that decides
         u[n_u++] = static_cast<float>(gam[0] / det.chi2_median.threshold[dofs[0]]);
-        if (gam[0] > thr) {
+        // The directional hold (parity_space.md "Directional hold"): a held track whose previous
+        // observation fitted a motion is tested one-sided along that direction d, z =
+        // d^T score / sqrt(d^T info d) against hold_direction_z, instead of against the lowered
+        // threshold; the full threshold still applies. Its verdicts report the one-sided GLR
+        // max(z, 0)^2 over hold_direction_z^2 with dof 1.
+        double d[2] = {0.0, 0.0};
+        double dd = 0.0;  // d^T info d (held: newest.prev >= 0)
+        if (held && det.hold_direction_z > 0.0 && motion.ok != 0 &&
+            decode_direction(pf.obs[newest.prev].dir, d)) {
+            dd = d[0] * d[0] * motion.info[0] + 2.0 * d[0] * d[1] * motion.info[1] +
+                 d[1] * d[1] * motion.info[2];
+        }
+        const bool directional = dd > 0.0;
+        double z_glr = 0.0;  // max(z, 0)^2
+        const double z_thr = det.hold_direction_z * det.hold_direction_z;
+        if (directional) {
+            const double z = (d[0] * motion.score[0] + d[1] * motion.score[1]) / std::sqrt(dd);
+            z_glr = z > 0.0 ? z * z : 0.0;
+            thr = full;
+        }
+        if (gam[0] > thr || (directional && z_glr > z_thr)) {
             // ALARM_HOLD only where the hold decided (the full threshold would have passed it)
             const bool by_hold = !(gam[0] > full);
-            set_verdict(v, SFD_VERDICT_SPURIOUS,
-                        by_hold ? SFD_REASON_ALARM_HOLD : SFD_REASON_FEATURE_TEST, dofs[0], gam[0],
-                        by_hold ? thr : full);
+            if (by_hold && directional) {
+                set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_ALARM_HOLD, 1, z_glr, z_thr);
+            } else {
+                set_verdict(v, SFD_VERDICT_SPURIOUS,
+                            by_hold ? SFD_REASON_ALARM_HOLD : SFD_REASON_FEATURE_TEST, dofs[0],
+                            gam[0], by_hold ? thr : full);
+            }
             v->fault_kind = SFD_FAULT_UNKNOWN;
             out->flags |= SFD_FLAG_PARITY_ALARM;
             // An alarm at the full threshold starts the track's segment again; a held one does
@@ -755,24 +824,34 @@ __attribute__((noinline)) bool test_with_filter(sfd_parity_t &det, sfd_window_t 
             // probability P(chi2(dof) > hold * full) (0.27-0.36 at 3-4 dof in the shipped
             // configuration, 0.10-0.14 above 0.4 full), so held false alarms would chain.
             const bool step = !(gam[0] < step_stat * full);
-            const bool weak = by_hold && gam[0] < hold_min * full;
+            // (A directional alarm is not weak: its own level bounds a locked track's repeats.)
+            const bool weak = by_hold && !directional && gam[0] < hold_min * full;
             newest.alarm = (step || weak) ? 0 : alarm_run;
             continue;
         }
-        set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, dofs[0], gam[0], thr);
+        if (directional) {
+            set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, 1, z_glr, z_thr);
+        } else {
+            set_verdict(v, SFD_VERDICT_CONSISTENT, SFD_REASON_FEATURE_TEST, dofs[0], gam[0], thr);
+        }
         if (!have_evidence || dofs[1] < 1 || dofs[1] > SFD_PARITY_MAX_RESIDUAL) continue;
         thr = det.chi2_half.threshold[dofs[1]];
+        // Not window alarms: the run stays 0 (as ingest set it) and the next window test is not
+        // held, except with the directional hold on and a direction fitted here: then the alarm
+        // is the first of a run (a slide the window absorbs is followed along its direction;
+        // a clean track's repeat costs at most alarm_hold_direction_alpha).
+        const bool starts_hold = det.hold_direction_z > 0.0 && newest.dir != kNoDirection;
         if (omnibus_on && gam[1] > thr) {
             set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_EVIDENCE, dofs[1], gam[1], thr);
             v->fault_kind = SFD_FAULT_DRIFT;
             out->flags |= SFD_FLAG_PARITY_ALARM;
-            // not a window alarm: the run stays 0 (as ingest set it), the next window test is
-            // not held
+            if (starts_hold) newest.alarm = 1;
         } else if (ramp_on && dofs[2] == 2 && gam[2] > det.ramp_threshold) {
             set_verdict(v, SFD_VERDICT_SPURIOUS, SFD_REASON_EVIDENCE_RAMP, 2, gam[2],
                         det.ramp_threshold);
             v->fault_kind = SFD_FAULT_DRIFT;
             out->flags |= SFD_FLAG_PARITY_ALARM;
+            if (starts_hold) newest.alarm = 1;
         }
     }
     update_noise_scale(det, u, n_u);
@@ -819,6 +898,16 @@ extern "C" sfd_status_t sfd_parity_init(sfd_parity_t *det, const sfd_params_t *p
         sfd_chi2_table_init(&det->chi2_half, ramp < 1.0 ? (1.0 - ramp) * alpha_ev : alpha_ev);
     if (th != SFD_OK) return th;
     det->ramp_threshold = ramp > 0.0 ? -2.0 * std::log(ramp * alpha_ev) : 0.0;
+    // The directional hold's one-sided threshold z with P(N(0, 1) > z) = a: z^2 is chi2(1)'s
+    // upper 2a quantile (a < 0.5, so z > 0).
+    det->hold_direction_z = 0.0;
+    const double a_dir = params->alarm_hold_direction_alpha;
+    if (a_dir > 0.0) {
+        double z2 = 0.0;
+        const sfd_status_t tz = sfd_chi2_quantile_upper(2.0 * a_dir, 1, &z2);
+        if (tz != SFD_OK) return tz;
+        det->hold_direction_z = std::sqrt(z2);
+    }
     det->noise_scale = 1.0;
     det->params = *params;
     det->camera = cam;

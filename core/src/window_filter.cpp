@@ -1127,11 +1127,13 @@ namespace {
 /// sfd_window_test_track() over obs's m frames (gamma[1], dof[1]) and, when 2 <= inner < m, the
 /// statistic of the newest `inner` frames' rows in the same linearization (gamma[0], dof[0];
 /// sfd_window_test_track_nested()); with ramp_glr, the ramp's GLR over the m frames
-/// (sfd_window_test_track_evidence(); -1 when not available). Arguments checked by the callers,
-/// except obs's content.
+/// (sfd_window_test_track_evidence(); -1 when not available); with motion, the ramp's fit over
+/// the newest `inner` frames, or the m frames without an inner test
+/// (sfd_window_test_track_motion()). Arguments checked by the callers, except obs's content.
 sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
                         const sfd_window_test_obs_t *obs, sfd_window_scratch_t *scratch, int inner,
-                        double gamma[2], int32_t dof[2], double *ramp_glr) {
+                        double gamma[2], int32_t dof[2], double *ramp_glr,
+                        sfd_window_motion_t *motion) {
     const int m = obs->frames;
     if (m < 2 || m > SFD_MAX_WINDOW) return SFD_ERR_INVAL;
     if (!w->started || w->num_clones < m - 1) return SFD_ERR_STATE;
@@ -1239,8 +1241,27 @@ sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
     // The rows of the newest `inner` frames are the last ones (the depth row, when there is one,
     // is the newest frame's and comes last): both statistics from one factorization.
     const int tail_first = (inner >= 2 && inner < m) ? 2 * (m - inner) : 0;
-    if (ramp_glr == nullptr)
-        return msckf_statistic_tail(tr, tr.R, tail_first, gamma, dof, nullptr, nullptr);
+    // The motion over the test's frames (parity_space.md "Directional hold"): frame k's pixel
+    // rows shifted by (k - k0) v, k0 the test's oldest frame; the depth row and the frames before
+    // k0 carry none.
+    double motion_cols[SFD_MSCKF_TRACK_ROWS][2];
+    if (motion != nullptr) {
+        const int k0 = tail_first / 2;
+        for (int i = 0; i < rows; ++i) {
+            motion_cols[i][0] = 0.0;
+            motion_cols[i][1] = 0.0;
+        }
+        for (int k = k0; k < m; ++k) {
+            const std::size_t ru = 2U * static_cast<std::size_t>(k), rv = ru + 1U;
+            motion_cols[ru][0] = static_cast<double>(k - k0);
+            motion_cols[rv][1] = static_cast<double>(k - k0);
+        }
+    }
+    const double(*mcols)[2] = (motion != nullptr) ? motion_cols : nullptr;
+    if (ramp_glr == nullptr) {
+        return msckf_statistic_tail(tr, tr.R, tail_first, gamma, dof, nullptr, nullptr, mcols,
+                                    motion);
+    }
     // The ramp (parity_space.md "Ramp"): frame k's pixel rows (oldest k = 0) shifted by k v in
     // normalized coordinates, v unknown; the depth row carries none.
     double ramp[SFD_MSCKF_TRACK_ROWS][2];
@@ -1255,7 +1276,7 @@ sfd_status_t test_track(sfd_window_t *w, const sfd_extrinsics_t *ext,
         ramp[i][0] = 0.0;
         ramp[i][1] = 0.0;
     }
-    return msckf_statistic_tail(tr, tr.R, tail_first, gamma, dof, ramp, ramp_glr);
+    return msckf_statistic_tail(tr, tr.R, tail_first, gamma, dof, ramp, ramp_glr, mcols, motion);
 }
 
 }  // namespace
@@ -1271,7 +1292,7 @@ extern "C" sfd_status_t sfd_window_test_track(sfd_window_t *w, const sfd_extrins
     }
     double g[2] = {0.0, 0.0};
     int32_t d[2] = {0, 0};
-    const sfd_status_t st = test_track(w, ext, obs, scratch, 0, g, d, nullptr);
+    const sfd_status_t st = test_track(w, ext, obs, scratch, 0, g, d, nullptr, nullptr);
     if (st != SFD_OK) return st;
     *gamma = g[1];
     *dof = d[1];
@@ -1292,7 +1313,7 @@ sfd_status_t test_track_inner(sfd_window_t *w, const sfd_extrinsics_t *ext,
         return SFD_ERR_INVAL;
     }
     if (inner < 2 || inner >= obs->frames) return SFD_ERR_INVAL;
-    return test_track(w, ext, obs, scratch, inner, g, d, ramp_glr);
+    return test_track(w, ext, obs, scratch, inner, g, d, ramp_glr, nullptr);
 }
 
 }  // namespace
@@ -1330,5 +1351,35 @@ extern "C" sfd_status_t sfd_window_test_track_evidence(sfd_window_t *w, const sf
     }
     gamma[2] = ramp >= 0.0 ? ramp : 0.0;
     dof[2] = ramp >= 0.0 ? 2 : 0;
+    return SFD_OK;
+}
+
+extern "C" sfd_status_t sfd_window_test_track_motion(sfd_window_t *w, const sfd_extrinsics_t *ext,
+                                                     const sfd_window_test_obs_t *obs,
+                                                     int32_t inner, int32_t ramp,
+                                                     sfd_window_scratch_t *scratch, double gamma[3],
+                                                     int32_t dof[3], sfd_window_motion_t *motion) {
+    if (w == nullptr || ext == nullptr || obs == nullptr || scratch == nullptr ||
+        gamma == nullptr || dof == nullptr) {
+        return SFD_ERR_INVAL;
+    }
+    const bool nested = inner != 0;
+    if (nested && (inner < 2 || inner >= obs->frames)) return SFD_ERR_INVAL;
+    if ((ramp != 0 && ramp != 1) || (ramp == 1 && !nested)) return SFD_ERR_INVAL;
+    double g[2] = {0.0, 0.0};
+    int32_t d[2] = {0, 0};
+    double ramp_glr = -1.0;
+    sfd_window_motion_t fit{};
+    const sfd_status_t st =
+        test_track(w, ext, obs, scratch, inner, g, d, ramp == 1 ? &ramp_glr : nullptr,
+                   motion != nullptr ? &fit : nullptr);
+    if (st != SFD_OK) return st;
+    gamma[0] = nested ? g[0] : g[1];
+    dof[0] = nested ? d[0] : d[1];
+    gamma[1] = nested ? g[1] : 0.0;
+    dof[1] = nested ? d[1] : 0;
+    gamma[2] = ramp_glr >= 0.0 ? ramp_glr : 0.0;
+    dof[2] = ramp_glr >= 0.0 ? 2 : 0;
+    if (motion != nullptr) *motion = fit;
     return SFD_OK;
 }

@@ -379,6 +379,8 @@ void fz_config_from_byte(uint8_t b, sfd_node_config_t *cfg) {
         cfg->params.alarm_hold_alpha_scale = (b & 1u) ? 1.0 : 0.3;
         /* every held alarm continues the hold, or none does (the default: 0.4) */
         cfg->params.alarm_hold_min_statistic = (b & 16u) ? 1.0 : 0.0;
+        /* the directional hold off, or at its largest level (the default: 0.2) */
+        cfg->params.alarm_hold_direction_alpha = (b & 32u) ? 0.0 : 0.4999;
     }
     if ((b & 0x84u) == 0x84u) { /* the ramp test alone (omnibus evidence test off) or no ramp
                                    test; otherwise the default share, 0.6 */

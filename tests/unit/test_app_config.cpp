@@ -128,6 +128,11 @@ std::vector<BadValue> bad_values() {
          "alarm_hold_alpha_scale: 0 is not in (0, 1]"},
         {"alarm_hold_alpha_scale", [](C &c) { c.node.params.alarm_hold_alpha_scale = 1.5; },
          "alarm_hold_alpha_scale: 1.5 is not in (0, 1]"},
+        {"alarm_hold_direction_alpha",
+         [](C &c) { c.node.params.alarm_hold_direction_alpha = -0.1; },
+         "alarm_hold_direction_alpha: -0.1 is not in [0, 0.5)"},
+        {"alarm_hold_direction_alpha", [](C &c) { c.node.params.alarm_hold_direction_alpha = 0.5; },
+         "alarm_hold_direction_alpha: 0.5 is not in [0, 0.5)"},
         {"evidence_ramp_share", [](C &c) { c.node.params.evidence_ramp_share = -0.1; },
          "evidence_ramp_share: -0.1 is not in [0, 1]"},
         {"evidence_ramp_share", [](C &c) { c.node.params.evidence_ramp_share = 1.5; },
@@ -294,6 +299,8 @@ void accepted_configurations_start_a_node(void **) {
             c.node.params.alarm_hold_alpha_scale = 1e-6;
         },
         [](C &c) { c.node.params.alarm_hold_alpha_scale = 1.0; },
+        [](C &c) { c.node.params.alarm_hold_direction_alpha = 0.0; },
+        [](C &c) { c.node.params.alarm_hold_direction_alpha = std::nextafter(0.5, 0.0); },
         [](C &c) { c.node.params.alarm_hold_min_statistic = 0.0; },
         [](C &c) {  // every held alarm ends the hold (the hold lasts one observation)
             c.node.params.alarm_hold_min_statistic = 1.0;

@@ -81,6 +81,9 @@ static void params_out_of_range_rejected(void **state) {
     EXPECT_FIELD(alarm_hold_min_statistic, -1e-9, SFD_ERR_INVAL);
     EXPECT_FIELD(alarm_hold_min_statistic, 1.0000001, SFD_ERR_INVAL);
     EXPECT_FIELD(alarm_hold_min_statistic, NAN, SFD_ERR_INVAL);
+    EXPECT_FIELD(alarm_hold_direction_alpha, -1e-9, SFD_ERR_INVAL);
+    EXPECT_FIELD(alarm_hold_direction_alpha, 0.5, SFD_ERR_INVAL);
+    EXPECT_FIELD(alarm_hold_direction_alpha, NAN, SFD_ERR_INVAL);
 }
 
 /* GIVEN boundary values THEN they are accepted. */
@@ -103,6 +106,8 @@ static void params_boundaries_accepted(void **state) {
     EXPECT_FIELD(evidence_ramp_share, 1.0, SFD_OK);
     EXPECT_FIELD(alarm_hold_min_statistic, 0.0, SFD_OK);
     EXPECT_FIELD(alarm_hold_min_statistic, 1.0, SFD_OK);
+    EXPECT_FIELD(alarm_hold_direction_alpha, 0.0, SFD_OK);
+    EXPECT_FIELD(alarm_hold_direction_alpha, 0.4999999, SFD_OK);
 }
 
 int main(void) {

@@ -669,6 +669,7 @@ typedef struct {
     long drift_flags;       /* SPURIOUS verdicts on the drifting tracks after their first flag */
     long drift_after_first; /* their tested observations after their first flag */
     long hold_flags;        /* SFD_REASON_ALARM_HOLD verdicts */
+    long directional_flags; /* ... of the directional hold (dof 1) */
     long hold_unearned;     /* ... on a track without alarm_hold_frames flags in a row before
                                (flags that continue the run: the window test's below
                                alarm_hold_max_statistic, held ones from alarm_hold_min_statistic) */
@@ -692,6 +693,7 @@ static double g_hold_max = -1.0;   /* alarm_hold_max_statistic */
 static double g_hold_scale = -1.0; /* alarm_hold_alpha_scale */
 static double g_ramp = -1.0;       /* evidence_ramp_share */
 static double g_hold_min = -1.0;   /* alarm_hold_min_statistic */
+static double g_hold_dir = -1.0;   /* alarm_hold_direction_alpha */
 
 static void drift_run(double drift_px, drift_run_t *out) {
     sfd_pipeline_config_t cfg;
@@ -703,6 +705,7 @@ static void drift_run(double drift_px, drift_run_t *out) {
     if (g_hold_scale > 0.0) cfg.params.alarm_hold_alpha_scale = g_hold_scale;
     if (g_ramp >= 0.0) cfg.params.evidence_ramp_share = g_ramp;
     if (g_hold_min >= 0.0) cfg.params.alarm_hold_min_statistic = g_hold_min;
+    if (g_hold_dir >= 0.0) cfg.params.alarm_hold_direction_alpha = g_hold_dir;
     assert_int_equal(cfg.params.translation_known, 1);
     assert_int_equal(cfg.params.pixel_noise_adapt, 1);
     assert_int_equal(cfg.params.evidence_frames, SFD_MAX_WINDOW);
@@ -745,15 +748,27 @@ static void drift_run(double drift_px, drift_run_t *out) {
             /* the window test's flags (held ones included) in a row; an evidence or ramp flag is
              * not one, nor a step's (statistic / threshold at least alarm_hold_max_statistic),
              * nor a held one below alarm_hold_min_statistic times the full threshold (its
-             * statistic is over alarm_hold_ratio times that) */
+             * statistic is over alarm_hold_ratio times that). A directional held flag (dof 1: a
+             * held window test has 3 or more) is never weak; with the directional hold on, an
+             * evidence or ramp flag on an observation with a fitted direction is the first of a
+             * run (parity_space.md "Directional hold") */
             const int window_flag = spurious && (r->reason == SFD_REASON_FEATURE_TEST ||
                                                  r->reason == SFD_REASON_ALARM_HOLD);
             const int step = r->reason == SFD_REASON_FEATURE_TEST &&
                              r->statistic >= cfg.params.alarm_hold_max_statistic;
+            const int directional = r->reason == SFD_REASON_ALARM_HOLD && r->dof == 1;
+            out->directional_flags += spurious && directional;
             const int weak =
-                r->reason == SFD_REASON_ALARM_HOLD &&
+                r->reason == SFD_REASON_ALARM_HOLD && !directional &&
                 r->statistic * cfg.params.alarm_hold_ratio < cfg.params.alarm_hold_min_statistic;
-            flags_in_a_row[i] = (window_flag && !step && !weak) ? flags_in_a_row[i] + 1 : 0;
+            const int evidence_start =
+                spurious &&
+                (r->reason == SFD_REASON_EVIDENCE || r->reason == SFD_REASON_EVIDENCE_RAMP) &&
+                cfg.params.alarm_hold_direction_alpha > 0.0 &&
+                g_p.parity.frames[g_p.parity.head].obs[i].dir != INT8_MIN;
+            flags_in_a_row[i] = (window_flag && !step && !weak) ? flags_in_a_row[i] + 1
+                                : evidence_start                ? 1
+                                                                : 0;
             if (i == JUMP_TRACK || r->status == SFD_VERDICT_UNTESTED) continue;
             if (f >= 60 && !(i >= DRIFT_FIRST && i < DRIFT_FIRST + DRIFT_TRACKS)) {
                 out->clean_tested++;
@@ -868,6 +883,7 @@ static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(v
     const double step_stat[5] = {3.0, 3.0, 3.0, 1.0, 3.0};
     const double scales[5] = {0.3, 0.3, 1.0, 0.3, 1.0};
     const double alpha = 0.01;
+    g_hold_dir = 0.0; /* the hold against the lowered threshold (the directional hold: below) */
     for (int k = 0; k < 5; ++k) {
         g_hold = ratios[k];
         g_hold_frames = after[k];
@@ -909,6 +925,7 @@ static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(v
     g_hold_frames = -1;
     g_hold_max = -1.0;
     g_hold_scale = -1.0;
+    g_hold_dir = -1.0;
     assert_true(runs[1].hold_flags > 0);
     assert_true(runs[2].hold_flags > 0 && runs[2].hold_flags < runs[4].hold_flags);
     /* the window test at its scaled level (no held flag in runs[3]) alarms less than off */
@@ -937,6 +954,7 @@ static void alarm_hold_releases_a_track_whose_fault_has_ended(void **state) {
     const double mins[2] = {0.0, -1.0}; /* every held alarm continues; the pipeline's 0.4 */
     drift_run_t runs[2];
     const double alpha = 0.01;
+    g_hold_dir = 0.0; /* the release of the hold against the lowered threshold */
     for (int k = 0; k < 2; ++k) {
         g_hold_min = mins[k];
         g_drift_cycle = 12;
@@ -963,6 +981,7 @@ static void alarm_hold_releases_a_track_whose_fault_has_ended(void **state) {
         assert_true(rate <= alpha + half);
     }
     g_hold_min = -1.0;
+    g_hold_dir = -1.0;
     assert_true(runs[0].after_hold_flags > 0);
     assert_true(3 * runs[1].after_hold_flags <= 2 * runs[0].after_hold_flags);
     assert_true(runs[1].after_flags < runs[0].after_flags);
@@ -1032,6 +1051,71 @@ static void ramp_test_flags_slow_drifts_sooner_and_keeps_clean_tracks_at_alpha(v
     assert_true(within10[1][1] >= within10[0][1] + 4);
 }
 
+/* GIVEN the hovering scene (0.5 px of pixel noise) WHEN parity runs with the pipeline's alarm hold
+ * (ratio 0.25, release 0.4) without the directional hold (alarm_hold_direction_alpha 0) and
+ * with it (0.2, the pipeline's default; parity_space.md "Directional hold") THEN its one-sided
+ * threshold is the standard normal's upper 0.2 quantile; with 20 tracks sliding in episodes
+ * from frame 60 (every 12 frames, 4 steps of 1.5 px, then the offset kept: from the second frame
+ * after an episode's last step the track follows its new point) the directional hold flags
+ * observations (dof 1), the observations after the episodes are flagged less often with it
+ * than without, and the episodes' own observations at least 95 % as often; with 20 tracks
+ * sliding 0.5 px per frame from frame 150, their observations after the first flag are flagged
+ * more often with it; in every run each held flag follows a run of flags that continue the hold
+ * (mirrored in drift_run: a directional held flag is never weak, and an evidence or ramp flag
+ * with a fitted direction starts a run), no held flag restarts the track's segment, and clean
+ * features are flagged at most at alpha (the 99 % binomial interval, a third of the tests
+ * independent). */
+static void directional_hold_follows_a_slide_and_releases_a_track_that_stopped(void **state) {
+    (void)state;
+    const double dirs[2] = {0.0, -1.0}; /* off; the pipeline's 0.2 */
+    drift_run_t episodes[2], slide[2];
+    const double alpha = 0.01;
+    for (int k = 0; k < 2; ++k) {
+        g_hold_dir = dirs[k];
+        g_drift_cycle = 12;
+        g_drift_steps = 4;
+        drift_run(1.5, &episodes[k]);
+        g_drift_cycle = 0;
+        g_drift_steps = 0;
+        const double a_dir = g_p.parity.params.alarm_hold_direction_alpha;
+        assert_true(a_dir == (k == 0 ? 0.0 : 0.2));
+        assert_true(g_p.parity.params.alarm_hold_ratio == 0.25);
+        assert_true(g_p.parity.params.alarm_hold_min_statistic == 0.4);
+        if (k == 1) {
+            assert_near(g_p.parity.hold_direction_z, 0.8416212335729143, 1e-9);
+        } else {
+            assert_true(g_p.parity.hold_direction_z == 0.0);
+        }
+        drift_run(0.5, &slide[k]);
+        const drift_run_t *rs[2] = {&episodes[k], &slide[k]};
+        for (int j = 0; j < 2; ++j) {
+            const drift_run_t *r = rs[j];
+            const double rate = (double)r->clean_flagged / (double)r->clean_tested;
+            const double half =
+                2.576 * sqrt(alpha * (1.0 - alpha) / ((double)r->clean_tested / 3.0));
+            printf(
+                "  direction alpha %.1f, %s: %ld directional flags, %ld held flags; after the "
+                "episodes %ld flags of %ld tested, in them %ld of %ld; slide after its first flag "
+                "%ld of %ld flagged; clean features flagged %.4f of %ld (99%% interval +-%.4f)\n",
+                a_dir, j == 0 ? "episodes" : "0.5 px/frame", r->directional_flags, r->hold_flags,
+                r->after_flags, r->after_tested, r->during_flags, r->during_tested, r->drift_flags,
+                r->drift_after_first, rate, r->clean_tested, half);
+            assert_true(r->clean_tested > 4000);
+            assert_int_equal(r->hold_unearned, 0);
+            assert_int_equal(r->segment_errors, 0);
+            assert_true(rate <= alpha + half);
+            if (k == 0) assert_int_equal(r->directional_flags, 0);
+        }
+    }
+    g_hold_dir = -1.0;
+    assert_true(episodes[1].directional_flags > 0 && slide[1].directional_flags > 0);
+    assert_true(episodes[0].after_tested > 500);
+    assert_true(episodes[1].after_flags < episodes[0].after_flags);
+    assert_true(100 * episodes[1].during_flags >= 95 * episodes[0].during_flags);
+    assert_true(slide[1].drift_flags * slide[0].drift_after_first >
+                slide[0].drift_flags * slide[1].drift_after_first);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(pipeline_refuses_frames_before_calibration_and_out_of_order),
@@ -1051,6 +1135,7 @@ int main(void) {
         cmocka_unit_test(alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha),
         cmocka_unit_test(ramp_test_flags_slow_drifts_sooner_and_keeps_clean_tracks_at_alpha),
         cmocka_unit_test(alarm_hold_releases_a_track_whose_fault_has_ended),
+        cmocka_unit_test(directional_hold_follows_a_slide_and_releases_a_track_that_stopped),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

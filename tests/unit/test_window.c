@@ -285,6 +285,12 @@ typedef struct {
     long ev_differ, ramp_tests, ramp_alarms;
     double ramp_sum;
     double ramp_worst; /* largest |GLR - dense reference| / (1 + GLR) */
+    /* sfd_window_test_track_motion: results that differ from sfd_window_test_track's (3 frames)
+     * and sfd_window_test_track_evidence's (5 frames, inner 3), fits (ok 1), the largest
+     * relative difference of a fit from its dense reference, and the one-sided statistics along
+     * x and y (z, two per fit): their number, those above N(0, 1)'s upper 10 % point, their sum */
+    long motion_differ, motion_fits, motion_z_tests, motion_z_alarms;
+    double motion_worst, motion_z_sum;
 } track_test_t;
 static track_test_t g_tt;
 #define HIST 5
@@ -380,6 +386,83 @@ static double dense_ramp_glr(const sfd_msckf_track_t *t, int m) {
     return explained(rows, X, SiXr, 5) - explained(rows, X, SiXr, 3);
 }
 
+/* The motion's fit (sfd_window_motion_t) by dense generalized least squares on the rows
+ * 2 k0 .. 2 m - 1 of the track in the scratch (frames k0..m-1; no depth row): with H = H_f and F's
+ * rows 2k, 2k + 1 = (k - k0, 0), (0, k - k0), G = [H F]^T S^-1 [H F] and g = [H F]^T S^-1 r over
+ * those rows, info = G_FF - G_FH G_HH^-1 G_HF and score = g_F - G_FH G_HH^-1 g_H. */
+static void dense_motion(const sfd_msckf_track_t *t, int k0, int m, double info[3],
+                         double score[2]) {
+    const int r0 = 2 * k0, n = 2 * (m - k0);
+    double X[12][5], S[12][12], SiXr[12][6];
+    memset(X, 0, sizeof X);
+    memset(S, 0, sizeof S);
+    for (int i = 0; i < n; ++i) {
+        for (int c = 0; c < 3; ++c) X[i][c] = t->Hf[r0 + i][c];
+        X[i][3 + (i & 1)] = (double)(i >> 1);
+        for (int j = 0; j < n; ++j) S[i][j] = t->R[r0 + i][r0 + j];
+        for (int c = 0; c < 5; ++c) SiXr[i][c] = X[i][c];
+        SiXr[i][5] = t->r[r0 + i];
+    }
+    dense_solve(n, S, 6, SiXr);
+    double G[5][5], g[5];
+    for (int a = 0; a < 5; ++a) {
+        g[a] = 0.0;
+        for (int i = 0; i < n; ++i) g[a] += X[i][a] * SiXr[i][5];
+        for (int b = 0; b < 5; ++b) {
+            G[a][b] = 0.0;
+            for (int i = 0; i < n; ++i) G[a][b] += X[i][a] * SiXr[i][b];
+        }
+    }
+    double A[12][12], Y[12][6];
+    memset(A, 0, sizeof A);
+    memset(Y, 0, sizeof Y);
+    for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) A[a][b] = G[a][b];
+        Y[a][0] = G[a][3];
+        Y[a][1] = G[a][4];
+        Y[a][2] = g[a];
+    }
+    dense_solve(3, A, 3, Y);
+    double I[2][2], sc[2];
+    for (int a = 0; a < 2; ++a) {
+        sc[a] = g[3 + a];
+        for (int c = 0; c < 3; ++c) sc[a] -= G[3 + a][c] * Y[c][2];
+        for (int b = 0; b < 2; ++b) {
+            I[a][b] = G[3 + a][3 + b];
+            for (int c = 0; c < 3; ++c) I[a][b] -= G[3 + a][c] * Y[c][b];
+        }
+    }
+    info[0] = I[0][0];
+    info[1] = 0.5 * (I[0][1] + I[1][0]);
+    info[2] = I[1][1];
+    score[0] = sc[0];
+    score[1] = sc[1];
+}
+
+/* The largest relative difference of a motion fit from its dense reference (over info's and
+ * score's scales), and the one-sided statistics along x and along y into the counts. */
+static double motion_check(const sfd_window_motion_t *mo, int k0, int m) {
+    double info[3], score[2];
+    dense_motion(&g_ws.track, k0, m, info, score);
+    const double si = sqrt(fabs(info[0] * info[2])) + 1e-300;
+    double worst = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        const double e = fabs(mo->info[c] - info[c]) / si;
+        if (e > worst) worst = e;
+    }
+    const double score_scale[2] = {sqrt(fabs(info[0])), sqrt(fabs(info[2]))};
+    for (int c = 0; c < 2; ++c) {
+        const double e = fabs(mo->score[c] - score[c]) / score_scale[c];
+        if (e > worst) worst = e;
+    }
+    /* z along (1, 0) and (0, 1): N(0, 1) on a clean track */
+    const double zx = mo->score[0] / sqrt(mo->info[0]), zy = mo->score[1] / sqrt(mo->info[2]);
+    g_tt.motion_z_alarms += (zx > 1.2815515655446004) + (zy > 1.2815515655446004);
+    g_tt.motion_z_sum += zx + zy;
+    g_tt.motion_z_tests += 2;
+    return worst;
+}
+
 static void track_tests(const sfd_extrinsics_t *ext, int f, int64_t t0_us, int jump_track,
                         int jump_frame) {
     sfd_chi2_table_t chi2;
@@ -399,6 +482,27 @@ static void track_tests(const sfd_extrinsics_t *ext, int f, int64_t t0_us, int j
                 g_tt.jump_alarm[f - jump_frame] = gamma > chi2.threshold[dof];
             continue;
         }
+        {
+            /* the same test with the motion's fit over its 3 frames */
+            double gm[3] = {-1, -1, -1};
+            int32_t dm[3] = {-1, -1, -1};
+            sfd_window_motion_t mo;
+            assert_status(sfd_window_test_track_motion(&g_w, ext, &o, 0, 0, &g_ws, gm, dm, &mo),
+                          SFD_OK);
+            g_tt.motion_differ += !(gm[0] == gamma && dm[0] == dof && gm[1] == 0.0 && dm[1] == 0 &&
+                                    gm[2] == 0.0 && dm[2] == 0);
+            /* without a fit (motion NULL): the same test */
+            double gn[3] = {-1, -1, -1};
+            int32_t dn[3] = {-1, -1, -1};
+            assert_status(sfd_window_test_track_motion(&g_w, ext, &o, 0, 0, &g_ws, gn, dn, NULL),
+                          SFD_OK);
+            g_tt.motion_differ += !(gn[0] == gamma && dn[0] == dof);
+            if (mo.ok) {
+                g_tt.motion_fits++;
+                const double e = motion_check(&mo, 0, 3);
+                if (e > g_tt.motion_worst) g_tt.motion_worst = e;
+            }
+        }
         if (seen_since(i, f, 5)) {
             sfd_window_test_obs_t o5;
             test_obs(i, 5, t0_us, f, &o5);
@@ -412,6 +516,24 @@ static void track_tests(const sfd_extrinsics_t *ext, int f, int64_t t0_us, int j
             const sfd_status_t se =
                 sfd_window_test_track_evidence(&g_w, ext, &o5, 3, &g_ws, g3, d3);
             assert_status(se, sn);
+            {
+                /* the same tests with the motion's fit over the inner 3 frames */
+                double gm[3] = {-1, -1, -1};
+                int32_t dm[3] = {-1, -1, -1};
+                sfd_window_motion_t mo;
+                const sfd_status_t sm =
+                    sfd_window_test_track_motion(&g_w, ext, &o5, 3, 1, &g_ws, gm, dm, &mo);
+                assert_status(sm, se);
+                if (sm == SFD_OK) {
+                    g_tt.motion_differ += !(gm[0] == g3[0] && gm[1] == g3[1] && gm[2] == g3[2] &&
+                                            dm[0] == d3[0] && dm[1] == d3[1] && dm[2] == d3[2]);
+                    if (mo.ok) {
+                        g_tt.motion_fits++;
+                        const double e = motion_check(&mo, 2, 5);
+                        if (e > g_tt.motion_worst) g_tt.motion_worst = e;
+                    }
+                }
+            }
             if (se == SFD_OK) {
                 g_tt.ev_differ +=
                     !(g3[0] == g2[0] && g3[1] == g2[1] && d3[0] == d2[0] && d3[1] == d2[1]);
@@ -1170,6 +1292,23 @@ static void the_track_test_with_the_filters_covariance_is_calibrated(void **stat
     assert_true(g_tt.ramp_tests > 5000);
     assert_true(fabs(ramp_rate - alpha) <= ramp_half);
     assert_true(fabs(ramp_mean - 2.0) < 0.1);
+    /* the motion's fit: the same tests, the dense reference's fit, and along a direction fixed
+     * in advance z is N(0, 1) on clean tracks (its 10 % upper point: the 99 % binomial interval,
+     * a third of the statistics independent; mean within 0.05) */
+    const double z_rate = (double)g_tt.motion_z_alarms / (double)g_tt.motion_z_tests;
+    const double z_half = 2.576 * sqrt(0.1 * 0.9 / ((double)g_tt.motion_z_tests / 3.0));
+    const double z_mean = g_tt.motion_z_sum / (double)g_tt.motion_z_tests;
+    printf(
+        "  motion (sfd_window_test_track_motion, 3 frames and inner 3 of 5): %ld fits, %ld "
+        "results differ from the tests'; largest difference from the dense fit %.1e; z along x "
+        "and y: above N(0,1)'s 10 %% point %.4f of %ld (99%% interval +-%.4f), mean %.4f\n",
+        g_tt.motion_fits, g_tt.motion_differ, g_tt.motion_worst, z_rate, g_tt.motion_z_tests,
+        z_half, z_mean);
+    assert_int_equal(g_tt.motion_differ, 0);
+    assert_true(g_tt.motion_fits > 10000);
+    assert_true(g_tt.motion_worst < 1e-6);
+    assert_true(fabs(z_rate - 0.1) <= z_half);
+    assert_true(fabs(z_mean) < 0.05);
     /* inner outside 2..m - 1: refused, nothing written */
     sfd_window_test_obs_t o;
     memset(&o, 0, sizeof o);
@@ -1187,6 +1326,22 @@ static void the_track_test_with_the_filters_covariance_is_calibrated(void **stat
         assert_status(sfd_window_test_track_evidence(&g_w, &ext, &o, 2, NULL, g3, d3),
                       SFD_ERR_INVAL);
         assert_true(g3[0] == -1.0 && g3[2] == -1.0 && d3[0] == -1 && d3[2] == -1);
+        /* the motion's call: inner 1 or m, a ramp without a nested test or not 0/1 */
+        sfd_window_motion_t mo;
+        memset(&mo, 0x5a, sizeof mo);
+        const sfd_window_motion_t untouched = mo;
+        assert_status(sfd_window_test_track_motion(&g_w, &ext, &o, 3, 0, &g_ws, g3, d3, &mo),
+                      SFD_ERR_INVAL);
+        assert_status(sfd_window_test_track_motion(&g_w, &ext, &o, 1, 0, &g_ws, g3, d3, &mo),
+                      SFD_ERR_INVAL);
+        assert_status(sfd_window_test_track_motion(&g_w, &ext, &o, 0, 1, &g_ws, g3, d3, &mo),
+                      SFD_ERR_INVAL);
+        assert_status(sfd_window_test_track_motion(&g_w, &ext, &o, 2, 2, &g_ws, g3, d3, &mo),
+                      SFD_ERR_INVAL);
+        assert_status(sfd_window_test_track_motion(&g_w, &ext, &o, 0, 0, NULL, g3, d3, &mo),
+                      SFD_ERR_INVAL);
+        assert_true(g3[0] == -1.0 && g3[2] == -1.0 && d3[0] == -1 && d3[2] == -1);
+        assert_memory_equal(&mo, &untouched, sizeof mo);
     }
     assert_true(g2[0] == -1.0 && g2[1] == -1.0 && d2[0] == -1 && d2[1] == -1);
 }

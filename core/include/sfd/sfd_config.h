@@ -5,11 +5,11 @@
  *        this header is included (all translation units of one build must agree).
  *
  * Memory cost at 256 features and L = 5 (x86-64, printed by the `proof.state_sizes` test):
- * sfd_parity_t 61352 B (the sliding window of observations, linear in SFD_MAX_FEATURES *
+ * sfd_parity_t 61368 B (the sliding window of observations, linear in SFD_MAX_FEATURES *
  * SFD_MAX_WINDOW), sfd_landmark_map_t 36536 B (SFD_MAX_LANDMARKS = 256), sfd_assoc_t 4392 B
  * with its work space sfd_assoc_work_t 14336 B, sfd_ekf_t 2000 B: 120336 B for the detectors
  * with the single-state EKF. The whole pipeline with the sliding-window filter
- * (sfd_pipeline_t) is 261696 B, within SPEC's 256 KiB; that test checks it (also at compile
+ * (sfd_pipeline_t) is 261736 B, within SPEC's 256 KiB; that test checks it (also at compile
  * time, so the cross builds prove it; core/docs/pipeline.md "Memory"). Stack per
  * call is bounded separately (`proof.stack_usage`).
  */

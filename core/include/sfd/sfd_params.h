@@ -69,33 +69,43 @@ typedef struct {
                                     core/docs/parity_space.md "Alarm hold"); 1: off; (0, 1] */
     int alarm_hold_frames;     /**< consecutive flagged observations that start the hold,
                                     1..SFD_ALARM_HOLD_MAX_FRAMES */
-    double alarm_hold_max_statistic; /**< an alarm whose statistic exceeds this many times its
-                                          threshold is a step (a jump, a mismatch: the track
-                                          then follows another point) and neither starts nor
-                                          continues the hold; [1, 1e6] */
-    double alarm_hold_alpha_scale;   /**< with the hold on (alarm_hold_ratio < 1): the window test
-                                          with the filter's translation runs at this fraction of
-                                          its share of false_alarm_rate, so that a clean track's
-                                          held repeats of a false alarm stay inside it (measured,
-                                          not derived: core/docs/parity_space.md "Alarm hold");
-                                          the evidence test (with its ramp test) keeps alpha / 2;
-                                          no effect with the hold off; (0, 1] */
-    double evidence_ramp_share;      /**< with the evidence test on: the share of its alpha / 2
-                                          that the ramp test over the same frames gets (the GLR
-                                          of a constant-rate slide, 2 dof;
-                                          sfd_window_test_track_evidence(), core/docs/
-                                          parity_space.md "Ramp"); the omnibus evidence test keeps
-                                          the rest (none at 1); 0: no ramp test; [0, 1] */
-    double alarm_hold_min_statistic; /**< with the hold on: an alarm the hold decided (its
-                                          statistic between alarm_hold_ratio and 1 times the
-                                          window test's threshold) continues the hold only when
-                                          its statistic is at least this many times that
-                                          threshold; a weaker one ends the run of alarms, so the
-                                          next observation is tested at the full threshold (a
-                                          track whose fault has ended, which the lowered
-                                          threshold would keep flagging, is released;
-                                          core/docs/parity_space.md "Alarm hold"). 0 (or at most
-                                          alarm_hold_ratio): every held alarm continues; [0, 1] */
+    double alarm_hold_max_statistic;   /**< an alarm whose statistic exceeds this many times its
+                                            threshold is a step (a jump, a mismatch: the track
+                                            then follows another point) and neither starts nor
+                                            continues the hold; [1, 1e6] */
+    double alarm_hold_alpha_scale;     /**< with the hold on (alarm_hold_ratio < 1): the window test
+                                            with the filter's translation runs at this fraction of
+                                            its share of false_alarm_rate, so that a clean track's
+                                            held repeats of a false alarm stay inside it (measured,
+                                            not derived: core/docs/parity_space.md "Alarm hold");
+                                            the evidence test (with its ramp test) keeps alpha / 2;
+                                            no effect with the hold off; (0, 1] */
+    double evidence_ramp_share;        /**< with the evidence test on: the share of its alpha / 2
+                                            that the ramp test over the same frames gets (the GLR
+                                            of a constant-rate slide, 2 dof;
+                                            sfd_window_test_track_evidence(), core/docs/
+                                            parity_space.md "Ramp"); the omnibus evidence test keeps
+                                            the rest (none at 1); 0: no ramp test; [0, 1] */
+    double alarm_hold_min_statistic;   /**< with the hold on: an alarm the hold decided (its
+                                            statistic between alarm_hold_ratio and 1 times the
+                                            window test's threshold) continues the hold only when
+                                            its statistic is at least this many times that
+                                            threshold; a weaker one ends the run of alarms, so the
+                                            next observation is tested at the full threshold (a
+                                            track whose fault has ended, which the lowered
+                                            threshold would keep flagging, is released;
+                                            core/docs/parity_space.md "Alarm hold"). 0 (or at most
+                                            alarm_hold_ratio): every held alarm continues; [0, 1] */
+    double alarm_hold_direction_alpha; /**< with the hold on: a held track whose previous
+                                            observation's window fitted a motion is tested
+                                            one-sided along that motion's direction, at this
+                                            false-alarm level, instead of against
+                                            alarm_hold_ratio times the threshold (a moving point
+                                            or a slide keeps its direction; a track whose fault
+                                            has ended does not: core/docs/parity_space.md
+                                            "Directional hold"); such an alarm continues the
+                                            hold whatever alarm_hold_min_statistic. 0: off;
+                                            [0, 0.5) */
 } sfd_params_t;
 
 /** Longest run of flagged observations alarm_hold_frames may ask for (the detector counts a

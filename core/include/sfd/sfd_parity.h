@@ -241,7 +241,8 @@ typedef struct {
                           the sigma so that float storage cannot underflow at any valid sigma) */
     uint32_t cell_key; /* the spatial grouping's key: Z-order code of the raw pixel's 16-px cell */
     int16_t prev;      /* index of this track in the previous frame, -1 none */
-    int16_t run;       /* consecutive frames observed, this one included (saturating) */
+    int8_t run;        /* consecutive frames observed, this one included (saturating at
+                          SFD_MAX_WINDOW <= 127) */
     int8_t segment;    /* observations since the track's last alarm at the full threshold (a
                           held one does not count), this one included (saturating at
                           SFD_MAX_WINDOW <= 127; the evidence test's window) */
@@ -249,8 +250,14 @@ typedef struct {
                           filter's translation flagged (held alarms included) below
                           alarm_hold_max_statistic times the threshold, ending at this one (0:
                           not flagged, flagged by the evidence test, a step's alarm, or a held
-                          alarm below alarm_hold_min_statistic times the full threshold;
-                          saturating at SFD_ALARM_HOLD_MAX_FRAMES): the next one's alarm hold */
+                          alarm below alarm_hold_min_statistic times the full threshold that the
+                          directional hold did not decide; 1 after an evidence or ramp alarm
+                          with the directional hold on and a direction fitted; saturating at
+                          SFD_ALARM_HOLD_MAX_FRAMES): the next one's alarm hold */
+    int8_t dir;        /* the direction of the motion the window test with the filter's
+                          translation fitted beside the point (sfd_window_motion_t), in one byte
+                          (parity_space.md "Directional hold"); INT8_MIN: none. The next
+                          observation's directional hold tests along it */
     int8_t valid;      /* 1 usable, 0 rejected input */
     int8_t prior; /* 1: depth_m, depth_var_m2 are the wire's prior; 0: the configured default */
 } sfd_parity_obs_t;
@@ -281,6 +288,9 @@ typedef struct {
                                      1 - evidence_ramp_share */
     double ramp_threshold;        /* the ramp test's chi2(2) threshold at evidence_ramp_share times
                                      alpha / 2; 0 when it is off */
+    double hold_direction_z;      /* the directional hold's one-sided threshold: the standard
+                                     normal's upper alarm_hold_direction_alpha quantile (0 when
+                                     that is off) */
     double noise_scale;           /* pixel noise variance factor (pixel_noise_adapt), 1 at init */
     float stat_scratch[SFD_MAX_FEATURES]; /* one frame's statistics for the scale (no content
                                              kept between frames) */
@@ -361,7 +371,10 @@ sfd_status_t sfd_parity_push_frame(sfd_parity_t *det, const sfd_frame_t *frame,
  * filter's poses and their covariance, the newest depth prior as a measurement, the threshold
  * chi2(dof, 1 - alpha) (alpha / 2 with the evidence test, times alarm_hold_alpha_scale with the
  * alarm hold on), or alarm_hold_ratio times it for a track whose last alarm_hold_frames
- * observations this test flagged (SFD_REASON_ALARM_HOLD when that flags it). Reason
+ * observations this test flagged (SFD_REASON_ALARM_HOLD when that flags it), or, with
+ * alarm_hold_direction_alpha > 0 and a direction fitted at the track's previous observation,
+ * one-sided along that direction (the directional hold: SFD_REASON_ALARM_HOLD with dof 1;
+ * core/docs/parity_space.md "Directional hold"). Reason
  * SFD_REASON_FEATURE_TEST otherwise; a feature that cannot be triangulated is UNTESTED
  * (SFD_REASON_RANK). A feature whose window passed and whose segment is longer than L is tested
  * again over it (evidence_frames): the omnibus evidence test (SFD_REASON_EVIDENCE) at

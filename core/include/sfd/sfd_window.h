@@ -357,6 +357,44 @@ sfd_status_t sfd_window_test_track_evidence(sfd_window_t *w, const sfd_extrinsic
                                             sfd_window_scratch_t *scratch, double gamma[3],
                                             int32_t dof[3]);
 
+/** The motion of one track over the frames of a test, fitted beside its point
+ *  (sfd_window_test_track_motion(); core/docs/parity_space.md "Directional hold"). The motion is
+ *  a ramp: frame j of the T frames (j = 0 the oldest) shifted by j v in normalized image
+ *  coordinates, v = (v_x, v_y) per frame. With the whitened residual w and the ramp's whitened
+ *  columns F, both projected off the point's columns (P), info = F^T P F and score = F^T P w:
+ *  the motion's estimate is v = info^-1 score, and along a direction d given in advance the
+ *  one-sided statistic z = d^T score / sqrt(d^T info d) is N(0, 1) for a static, correctly
+ *  tracked feature, N(d^T info v / sqrt(d^T info d), 1) for one moving by v per frame. */
+typedef struct {
+    int32_t ok;      /**< 1: fitted; 0: the ramp cannot be told from the point over these frames
+                          (fewer than 6 rows, i.e. fewer than 3 frames, or no motion separates
+                          them; info and score are then 0) */
+    double info[3];  /**< F^T P F: xx, xy, yy (per (normalized unit per frame)^2) */
+    double score[2]; /**< F^T P w: x, y */
+} sfd_window_motion_t;
+
+/**
+ * @brief sfd_window_test_track() (@p inner 0) or sfd_window_test_track_nested() (2 <= @p inner <
+ *        m), with the ramp test over the m frames when @p ramp is 1
+ *        (sfd_window_test_track_evidence(); only with a nested test), and, from the same
+ *        factorization, the ramp's fit over the decisive test's frames: the newest @p inner
+ *        frames, or all m with @p inner 0 (sfd_window_motion_t; parity_space.md "Directional
+ *        hold"). The parity detector's one call per feature.
+ * @param gamma gamma[0] the decisive test's statistic (the m-frame test with inner 0, the inner
+ *        test otherwise); gamma[1] the m-frame test's with a nested test (else 0); gamma[2] the
+ *        ramp's GLR (0 when not computed). dof likewise (dof[2] = 2, or 0 as for
+ *        sfd_window_test_track_evidence()).
+ * @param motion the fit; NULL: no fit (the tests alone, at their cost).
+ * @return as sfd_window_test_track_nested() (SFD_ERR_INVAL also for inner not 0 nor in
+ *         2..m - 1, ramp not 0 or 1, or ramp 1 without a nested test). On any error nothing is
+ *         written to gamma, dof and motion.
+ */
+sfd_status_t sfd_window_test_track_motion(sfd_window_t *w, const sfd_extrinsics_t *ext,
+                                          const sfd_window_test_obs_t *obs, int32_t inner,
+                                          int32_t ramp, sfd_window_scratch_t *scratch,
+                                          double gamma[3], int32_t dof[3],
+                                          sfd_window_motion_t *motion);
+
 /** @brief Position variance (m^2, x y z) of the IMU state. SFD_ERR_STATE when not started. */
 sfd_status_t sfd_window_position_var(sfd_window_t *w, double var_m2[3]);
 
