@@ -935,10 +935,22 @@ static void alarm_hold_flags_only_after_a_flag_and_keeps_clean_tracks_at_alpha(v
     assert_int_equal(runs[3].hold_flags, 0);
 }
 
+/* drift_run with the 20 drifting tracks sliding in episodes from frame 60: in every 12 frames, 4
+ * frames of 1.5 px per frame (3 sigma), then the offset kept (the tracker follows another
+ * point). */
+static void drift_episodes_run(drift_run_t *out) {
+    g_drift_cycle = 12;
+    g_drift_steps = 4;
+    drift_run(1.5, out);
+    g_drift_cycle = 0;
+    g_drift_steps = 0;
+}
+
 /* GIVEN the hovering scene (0.5 px of pixel noise) with 20 tracks that slide in episodes from
  * frame 60: in every 12 frames, 4 frames of 1.5 px per frame (3 sigma), then the offset kept
  * (the tracker follows another point; from the second frame after an episode's last step the
- * track's windows hold no step) WHEN parity runs with the pipeline's alarm hold (ratio 0.25)
+ * track's windows hold no step) WHEN parity runs with the pipeline's alarm hold (ratio 0.25;
+ * the directional hold off, its own test is below)
  * and every held alarm continuing it (alarm_hold_min_statistic 0) or only those from 0.4 times
  * the full threshold (the pipeline's default) THEN every held flag follows a run of flags that
  * continue the hold (the rule, mirrored from the verdicts in drift_run: hold_unearned), and with
@@ -957,11 +969,7 @@ static void alarm_hold_releases_a_track_whose_fault_has_ended(void **state) {
     g_hold_dir = 0.0; /* the release of the hold against the lowered threshold */
     for (int k = 0; k < 2; ++k) {
         g_hold_min = mins[k];
-        g_drift_cycle = 12;
-        g_drift_steps = 4;
-        drift_run(1.5, &runs[k]);
-        g_drift_cycle = 0;
-        g_drift_steps = 0;
+        drift_episodes_run(&runs[k]);
         const drift_run_t *r = &runs[k];
         const double min_stat = g_p.parity.params.alarm_hold_min_statistic;
         assert_true(min_stat == (k == 0 ? 0.0 : 0.4));
@@ -1072,11 +1080,7 @@ static void directional_hold_follows_a_slide_and_releases_a_track_that_stopped(v
     const double alpha = 0.01;
     for (int k = 0; k < 2; ++k) {
         g_hold_dir = dirs[k];
-        g_drift_cycle = 12;
-        g_drift_steps = 4;
-        drift_run(1.5, &episodes[k]);
-        g_drift_cycle = 0;
-        g_drift_steps = 0;
+        drift_episodes_run(&episodes[k]);
         const double a_dir = g_p.parity.params.alarm_hold_direction_alpha;
         assert_true(a_dir == (k == 0 ? 0.0 : 0.2));
         assert_true(g_p.parity.params.alarm_hold_ratio == 0.25);
@@ -1093,13 +1097,17 @@ static void directional_hold_follows_a_slide_and_releases_a_track_that_stopped(v
             const double rate = (double)r->clean_flagged / (double)r->clean_tested;
             const double half =
                 2.576 * sqrt(alpha * (1.0 - alpha) / ((double)r->clean_tested / 3.0));
-            printf(
-                "  direction alpha %.1f, %s: %ld directional flags, %ld held flags; after the "
-                "episodes %ld flags of %ld tested, in them %ld of %ld; slide after its first flag "
-                "%ld of %ld flagged; clean features flagged %.4f of %ld (99%% interval +-%.4f)\n",
-                a_dir, j == 0 ? "episodes" : "0.5 px/frame", r->directional_flags, r->hold_flags,
-                r->after_flags, r->after_tested, r->during_flags, r->during_tested, r->drift_flags,
-                r->drift_after_first, rate, r->clean_tested, half);
+            printf("  direction alpha %.1f, %s: %ld directional flags of %ld held flags; ", a_dir,
+                   j == 0 ? "episodes" : "0.5 px/frame slide", r->directional_flags, r->hold_flags);
+            if (j == 0) {
+                printf("after the episodes %ld flags of %ld tested, in them %ld of %ld; ",
+                       r->after_flags, r->after_tested, r->during_flags, r->during_tested);
+            } else {
+                printf("after the first flag %ld of %ld flagged; ", r->drift_flags,
+                       r->drift_after_first);
+            }
+            printf("clean features flagged %.4f of %ld (99%% interval +-%.4f)\n", rate,
+                   r->clean_tested, half);
             assert_true(r->clean_tested > 4000);
             assert_int_equal(r->hold_unearned, 0);
             assert_int_equal(r->segment_errors, 0);
