@@ -250,6 +250,18 @@ bool ramp_glr_of(const double (*G)[kRows], const double (*F)[kRows], const doubl
     return true;
 }
 
+/// The first n of the reversed rows of a 2-column fault signature `cols` (rows x 2), whitened by
+/// the Cholesky factor L of the reversed S: F[c] = L_n^-1 (cols reversed)[0..n)[c], the prefix of
+/// the forward substitution (n = rows: all of them; n = the tail: the tail's rows, whose block of
+/// L is the tail's own factor).
+void whiten_pair(const double (*L)[kRows], const double (*cols)[2], int rows, int n,
+                 double F[2][kRows]) {
+    for (int c = 0; c < 2; ++c) {
+        for (int i = 0; i < n; ++i) F[c][i] = cols[rows - 1 - i][c];
+        la::forward_solve(L, n, F[c], F[c]);
+    }
+}
+
 /// The motion's fit over the n whitened rows (sfd_window_motion_t): with the fault's block
 /// B = M[3..4][3..4] of point_and_fault() (lower triangular), info = B B^T and score = B c[3..4].
 bool motion_fit_of(const double (*G)[kRows], const double (*F)[kRows], const double *w, int n,
@@ -307,10 +319,7 @@ sfd_status_t sfd::msckf_statistic_tail(const sfd_msckf_track_t &t,
     if (ramp_cols != nullptr && ramp_glr != nullptr) {
         // whitened like H_f's columns (rows reversed); rows - 5 >= 1 residual rows remain
         double F[2][kRows];
-        for (int c = 0; c < 2; ++c) {
-            for (int i = 0; i < rows; ++i) F[c][i] = ramp_cols[rows - 1 - i][c];
-            la::forward_solve(L, rows, F[c], F[c]);
-        }
+        whiten_pair(L, ramp_cols, rows, rows, F);
         double g = 0.0;
         *ramp_glr = (rows >= 6 && ramp_glr_of(G, F, w, rows, &g)) ? g : -1.0;
     }
@@ -318,10 +327,7 @@ sfd_status_t sfd::msckf_statistic_tail(const sfd_msckf_track_t &t,
         // the tail's rows are the first `tail` of the reversed system: its whitened columns are
         // the prefix of the forward substitution (as for the tail's statistic)
         double F[2][kRows];
-        for (int c = 0; c < 2; ++c) {
-            for (int i = 0; i < tail; ++i) F[c][i] = motion_cols[rows - 1 - i][c];
-            la::forward_solve(L, tail, F[c], F[c]);
-        }
+        whiten_pair(L, motion_cols, rows, tail, F);
         sfd_window_motion_t fit{};
         if (tail >= 6 && motion_fit_of(G, F, w, tail, &fit)) {
             fit.ok = 1;
